@@ -1,0 +1,98 @@
+//! Persistent contact state: a contact fixes its damping at first touch and carries its
+//! corrected box from one sub-step to the next until the bodies part.
+
+use parry3d_f64::bounding_volume::Aabb;
+
+use crate::error::Result;
+use crate::force::{contact_force, BodyKinematics, ContactForce};
+use crate::material::PairParameters;
+use crate::math::{Pose, Real};
+use crate::overlap::{compute_overlap, OverlapGeometry, OverlapSettings};
+use crate::shape::Sdf;
+
+/// A body as the contact sees it: shape, pose and motion.
+#[derive(Clone, Copy, Debug)]
+pub struct BodyState<'a, S: ?Sized> {
+    /// The body's SDF (body frame).
+    pub shape: &'a S,
+    /// Body frame → world.
+    pub pose: Pose,
+    /// Centre of mass and velocities (world).
+    pub kinematics: BodyKinematics,
+}
+
+impl<'a, S: ?Sized> BodyState<'a, S> {
+    /// A body at rest whose centre of mass is the origin of its frame.
+    pub fn at_rest(shape: &'a S, pose: Pose) -> Self {
+        Self { shape, pose, kinematics: BodyKinematics::at_rest(pose.translation) }
+    }
+
+    /// With velocities (m/s, rad/s) about the centre of mass.
+    pub fn moving(mut self, linvel: crate::math::Vector, angvel: crate::math::Vector) -> Self {
+        self.kinematics.linvel = linvel;
+        self.kinematics.angvel = angvel;
+        self
+    }
+}
+
+/// What a live contact remembers between sub-steps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactState {
+    /// Damping constant `c` (s/m), fixed at first touch from the approach speed then.
+    pub damping: Real,
+    /// Normal approach speed at first touch (m/s).
+    pub first_approach_speed: Real,
+    /// Last corrected overlap box (pair frame), the rough box of the next sub-step.
+    pub corrected_box: Aabb,
+}
+
+/// Geometry and force of one evaluation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactOutput {
+    /// Overlap geometry.
+    pub geometry: OverlapGeometry,
+    /// Force and torques.
+    pub force: ContactForce,
+}
+
+/// The contact law for one kind of pair: force parameters plus overlap resolution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactModel {
+    /// Force-law parameters.
+    pub params: PairParameters,
+    /// Overlap grid resolution and mode.
+    pub settings: OverlapSettings,
+}
+
+impl ContactModel {
+    /// A model from checked parameters.
+    pub fn new(params: PairParameters, settings: OverlapSettings) -> Self {
+        Self { params, settings }
+    }
+
+    /// Evaluates the pair and updates its persistent `state`: `None` → a new contact starts
+    /// (damping from the current approach speed); bodies apart → `state` is cleared and
+    /// `Ok(None)` returned.
+    pub fn evaluate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        a: &BodyState<'_, A>,
+        b: &BodyState<'_, B>,
+        state: &mut Option<ContactState>,
+    ) -> Result<Option<ContactOutput>> {
+        a.kinematics.check("kinematics of body A")?;
+        b.kinematics.check("kinematics of body B")?;
+        let previous = state.as_ref().map(|s| s.corrected_box);
+        let Some(geometry) = compute_overlap(a.shape, &a.pose, b.shape, &b.pose, &self.settings, previous.as_ref())? else {
+            *state = None;
+            return Ok(None);
+        };
+        let s = state.get_or_insert_with(|| {
+            let x = geometry.contact_point;
+            let v0 = -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
+            ContactState { damping: self.params.damping_for(v0), first_approach_speed: v0, corrected_box: geometry.corrected_box }
+        });
+        s.corrected_box = geometry.corrected_box;
+        let force = contact_force(&self.params, s.damping, &geometry, &a.kinematics, &b.kinematics);
+        Ok(Some(ContactOutput { geometry, force }))
+    }
+}

@@ -1,0 +1,85 @@
+//! Typed errors: every error names what was wrong and what would be right.
+
+use crate::math::Real;
+
+/// Everything the library can refuse, with the reason.
+///
+/// The variants are listed in the crate's error catalogue (see the crate docs).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// A scalar parameter is outside its allowed range (or not finite).
+    #[error("invalid parameter `{name}` = {value:e}: allowed range is {allowed}")]
+    InvalidParameter {
+        /// The parameter's name, as in the API.
+        name: &'static str,
+        /// The value that was given.
+        value: Real,
+        /// The allowed range, in words.
+        allowed: &'static str,
+    },
+    /// A parry shape that has no convex signed distance function here.
+    #[error("unsupported shape `{shape}`: {why}")]
+    UnsupportedShape {
+        /// The shape's type name.
+        shape: String,
+        /// Why it is refused and what to use instead.
+        why: &'static str,
+    },
+    /// A position, orientation or velocity that is NaN or infinite.
+    #[error("non-finite {what}: {detail}")]
+    NonFinite {
+        /// Which quantity (e.g. `pose of body A`).
+        what: &'static str,
+        /// The offending value, printed.
+        detail: String,
+    },
+    /// The two bodies' bounds do not limit the overlap region (e.g. two half-spaces).
+    #[error("unbounded overlap region between {a} and {b}: at least one body must be bounded")]
+    UnboundedOverlap {
+        /// First body's description.
+        a: String,
+        /// Second body's description.
+        b: String,
+    },
+}
+
+/// `Result` with this crate's [`Error`].
+pub type Result<T> = core::result::Result<T, Error>;
+
+/// Checks that `value` is finite and inside `[lo, hi]` (inclusive bounds where `*_incl`).
+pub(crate) fn check_range(
+    name: &'static str,
+    value: Real,
+    lo: Real,
+    lo_incl: bool,
+    hi: Real,
+    hi_incl: bool,
+    allowed: &'static str,
+) -> Result<Real> {
+    let lo_ok = if lo_incl { value >= lo } else { value > lo };
+    let hi_ok = if hi_incl { value <= hi } else { value < hi };
+    if value.is_finite() && lo_ok && hi_ok {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter { name, value, allowed })
+    }
+}
+
+/// Checks that `value` is finite and strictly positive.
+pub(crate) fn check_positive(name: &'static str, value: Real) -> Result<Real> {
+    check_range(name, value, 0.0, false, Real::INFINITY, false, "finite and > 0")
+}
+
+/// Checks that `value` is finite and not negative.
+pub(crate) fn check_non_negative(name: &'static str, value: Real) -> Result<Real> {
+    check_range(name, value, 0.0, true, Real::INFINITY, false, "finite and >= 0")
+}
+
+/// Checks that every component of a vector is finite.
+pub(crate) fn check_finite_vec(what: &'static str, v: crate::math::Vector) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::NonFinite { what, detail: format!("{v:?}") })
+    }
+}

@@ -1,0 +1,73 @@
+//! # discrete-contact
+//!
+//! Discrete overlap-volume contacts (Nassauer & Kuna 2013, as discretised in seed 000) for
+//! arbitrarily shaped convex rigid bodies given as signed distance functions.
+//!
+//! Data flows one way: body pose → [`shape`] (SDF) → [`overlap`] (volume, contact point,
+//! normal, indentation) → [`force`] (normal force with restitution damping, friction,
+//! torques) → body. [`contact`] keeps what a contact remembers between sub-steps.
+//!
+//! ```
+//! use discrete_contact::prelude::*;
+//!
+//! let ball = ConvexShape::ball(0.01)?;                       // 1 cm sphere
+//! let floor = ConvexShape::half_space(Vector::Y)?;           // the plane y = 0
+//! let steel = Material::new(200e9, 0.3)?;
+//! let model = ContactModel::new(
+//!     PairParameters::new(&steel, &steel, 0.9)?,
+//!     OverlapSettings::new(8, IntegrationMode::Subcell)?,
+//! );
+//! let a = BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.01 - 1e-5, 0.0)))
+//!     .moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO);
+//! let b = BodyState::at_rest(&floor, Pose::IDENTITY);
+//! let mut state = None;
+//! let out = model.evaluate(&a, &b, &mut state)?.expect("they overlap");
+//! assert!(out.force.force_on_a.y > 0.0);                    // pushes the ball up
+//! # Ok::<(), discrete_contact::Error>(())
+//! ```
+//!
+//! ## Errors
+//! Every fallible call returns [`Error`]; its variants are the catalogue:
+//! - [`Error::InvalidParameter`] — a scalar outside its range (`E > 0`, `0 <= ν <= 0.5`,
+//!   `0 < e <= 1`, `μ_s >= μ_k >= 0`, `v_s > 0`, `N_c >= 1`, positive finite sizes); the message
+//!   names the parameter and the range. Fix the input.
+//! - [`Error::UnsupportedShape`] — a parry shape with no convex SDF (meshes, compounds,
+//!   height fields); decompose it into convex pieces or pass a custom SDF.
+//! - [`Error::NonFinite`] — a NaN/infinite pose, velocity or vertex; usually a blown-up
+//!   simulation upstream: reduce the time step.
+//! - [`Error::UnboundedOverlap`] — both bodies unbounded (two half-spaces); such a pair has no
+//!   contact to compute.
+
+#![warn(missing_docs)]
+
+pub mod contact;
+pub mod error;
+pub mod force;
+pub mod material;
+pub mod overlap;
+pub mod shape;
+pub mod validation;
+
+pub use contact::{BodyState, ContactModel, ContactOutput, ContactState};
+pub use error::{Error, Result};
+pub use force::{contact_force, normal_force, BodyKinematics, ContactForce};
+pub use material::{damping_from_restitution, effective_modulus, Friction, Material, PairParameters, StiffnessFactor};
+pub use overlap::{compute_overlap, IntegrationMode, OverlapGeometry, OverlapSettings};
+pub use shape::{ConvexShape, Sdf};
+
+/// The math types of parry/rapier (f64): `Real`, `Vector` (glam `DVec3`), `Pose`, `Rotation`.
+pub mod math {
+    pub use parry3d_f64::math::{Matrix, Pose, Real, Rotation, Vector};
+}
+
+/// Re-export of the parry version the shapes come from.
+pub use parry3d_f64;
+
+/// Everything a typical user needs.
+pub mod prelude {
+    pub use crate::math::{Pose, Real, Rotation, Vector};
+    pub use crate::{
+        BodyKinematics, BodyState, ContactModel, ConvexShape, Friction, IntegrationMode, Material, OverlapSettings,
+        PairParameters, Sdf, StiffnessFactor,
+    };
+}

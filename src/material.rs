@@ -1,0 +1,224 @@
+//! Materials and the parameters of a contact pair, checked when built.
+//!
+//! All quantities are SI: Pa, m/s, s/m.
+
+use crate::error::{check_non_negative, check_positive, check_range, Error, Result};
+use crate::math::Real;
+
+/// An isotropic elastic material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    youngs_modulus: Real,
+    poisson_ratio: Real,
+}
+
+impl Material {
+    /// Young's modulus `E > 0` (Pa) and Poisson's ratio `0 <= nu <= 0.5`.
+    pub fn new(youngs_modulus: Real, poisson_ratio: Real) -> Result<Self> {
+        Ok(Self {
+            youngs_modulus: check_positive("youngs_modulus", youngs_modulus)?,
+            poisson_ratio: check_range("poisson_ratio", poisson_ratio, 0.0, true, 0.5, true, "0 <= nu <= 0.5")?,
+        })
+    }
+
+    /// Young's modulus (Pa).
+    pub fn youngs_modulus(&self) -> Real {
+        self.youngs_modulus
+    }
+
+    /// Poisson's ratio.
+    pub fn poisson_ratio(&self) -> Real {
+        self.poisson_ratio
+    }
+
+    /// `(1 - nu^2) / E`, this material's share of the pair's compliance.
+    fn compliance(&self) -> Real {
+        (1.0 - self.poisson_ratio * self.poisson_ratio) / self.youngs_modulus
+    }
+}
+
+/// Effective modulus `E*` of a pair: `1/E* = (1 - nu_A^2)/E_A + (1 - nu_B^2)/E_B` (DESIGN §3, fixed).
+pub fn effective_modulus(a: &Material, b: &Material) -> Real {
+    1.0 / (a.compliance() + b.compliance())
+}
+
+/// The factor `k` in `F_n = E* k sqrt(V d)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StiffnessFactor {
+    /// `k = 4/(3 sqrt(pi))`: reproduces Hertz for curved contacts (sphere–plane, sphere–sphere,
+    /// crossed cylinders). The default.
+    Curved,
+    /// `k = 2/sqrt(pi)`: reproduces the flat punch `F = 2 R E* d`.
+    FlatPunch,
+    /// From the overlap's shape: `k = 0.6118 + 1.9001 exp(-0.6512 d S / V)` with `S` the overlap
+    /// surface area (a published fit; 0.752 sphere–plane, 1.128 face–face).
+    ShapeAdaptive,
+    /// A fixed value (e.g. `0.62` for polyhedra).
+    Custom(Real),
+}
+
+impl StiffnessFactor {
+    /// The factor for an overlap of volume `v`, depth `d` and surface area `s`.
+    pub fn value(&self, v: Real, d: Real, s: Real) -> Real {
+        match *self {
+            Self::Curved => 4.0 / (3.0 * core::f64::consts::PI.sqrt()),
+            Self::FlatPunch => 2.0 / core::f64::consts::PI.sqrt(),
+            Self::ShapeAdaptive => {
+                if v > 0.0 {
+                    0.6118 + 1.9001 * (-0.6512 * d * s / v).exp()
+                } else {
+                    0.6118
+                }
+            }
+            Self::Custom(k) => k,
+        }
+    }
+}
+
+/// Static/kinetic friction of Nassauer & Kuna.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Friction {
+    /// Static coefficient `mu_s >= mu_k`.
+    pub static_coefficient: Real,
+    /// Kinetic coefficient `mu_k >= 0`.
+    pub kinetic_coefficient: Real,
+    /// Static-to-kinetic transition speed `v_s > 0` (m/s).
+    pub transition_speed: Real,
+}
+
+impl Friction {
+    /// No friction: the tangential force is skipped entirely.
+    pub const NONE: Friction = Friction { static_coefficient: 0.0, kinetic_coefficient: 0.0, transition_speed: 1.0 };
+
+    /// `mu_s >= mu_k >= 0`, `v_s > 0`.
+    pub fn new(static_coefficient: Real, kinetic_coefficient: Real, transition_speed: Real) -> Result<Self> {
+        let mu_k = check_non_negative("kinetic_coefficient", kinetic_coefficient)?;
+        let mu_s = check_non_negative("static_coefficient", static_coefficient)?;
+        if mu_s < mu_k {
+            return Err(Error::InvalidParameter {
+                name: "static_coefficient",
+                value: mu_s,
+                allowed: "finite and >= kinetic_coefficient",
+            });
+        }
+        Ok(Self { static_coefficient: mu_s, kinetic_coefficient: mu_k, transition_speed: check_positive("transition_speed", transition_speed)? })
+    }
+
+    /// Whether this friction does nothing (`mu_s = 0`).
+    pub fn is_none(&self) -> bool {
+        self.static_coefficient == 0.0
+    }
+
+    /// `|F_t| / F_n` at tangential slip speed `slip` (m/s):
+    /// `(2 mu_s* - mu_k) s^2/(s^4+1) + mu_k - mu_k/(s^2+1)`, `s = slip/v_s`,
+    /// `mu_s* = mu_s (1 - 0.09 (mu_k/mu_s)^4)`.
+    pub fn coefficient(&self, slip: Real) -> Real {
+        if self.is_none() || slip <= 0.0 {
+            return 0.0;
+        }
+        let (mu_s, mu_k) = (self.static_coefficient, self.kinetic_coefficient);
+        let mu_s_star = mu_s * (1.0 - 0.09 * (mu_k / mu_s).powi(4));
+        let s2 = (slip / self.transition_speed).powi(2);
+        if !s2.is_finite() {
+            return mu_k;
+        }
+        (2.0 * mu_s_star - mu_k) * s2 / (s2 * s2 + 1.0) + mu_k - mu_k / (s2 + 1.0)
+    }
+}
+
+/// Damping constant `c` (s/m) that gives restitution `e` for an impact at normal speed `v0`
+/// under any force `f(x) (1 + c x')` (Carvalho & Martins 2019).
+///
+/// Solves `a - ln(1 + a) = -a e - ln(1 - a e)` for `0 < a < 1/e` and returns `c = a / v0`;
+/// `e = 1` gives `c = 0`.
+pub fn damping_from_restitution(restitution: Real, approach_speed: Real) -> Result<Real> {
+    let e = check_range("restitution", restitution, 0.0, false, 1.0, true, "0 < e <= 1")?;
+    let v0 = check_positive("approach_speed", approach_speed)?;
+    Ok(restitution_parameter(e) / v0)
+}
+
+/// The dimensionless `a = c v0` of [`damping_from_restitution`] for `0 < e <= 1`.
+fn restitution_parameter(e: Real) -> Real {
+    if 1.0 - e < 1e-7 {
+        // Leading order of the series a ~ 3(1-e²)/(2(1+e³)), exact as e -> 1.
+        return 1.5 * (1.0 - e * e) / (1.0 + e * e * e);
+    }
+    // g > 0 on (0, a*), g < 0 on (a*, 1/e).
+    let g = |a: Real| a - a.ln_1p() + a * e + (-a * e).ln_1p();
+    let mut lo = 1.5 * (1.0 - e) * (11.0 - e) / (1.0 + 9.0 * e);
+    while g(lo) <= 0.0 {
+        lo *= 0.5;
+    }
+    let mut hi = (lo * 2.0).min(1.0 / e);
+    while hi < 1.0 / e && g(hi) > 0.0 {
+        hi = (hi * 2.0).min(1.0 / e);
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if g(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Everything the force law needs for one pair of materials.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PairParameters {
+    /// `E*` (Pa).
+    pub effective_modulus: Real,
+    /// The factor `k`.
+    pub stiffness: StiffnessFactor,
+    /// Coefficient of restitution `0 < e <= 1`.
+    pub restitution: Real,
+    /// Friction; [`Friction::NONE`] skips the tangential force.
+    pub friction: Friction,
+    /// Approach speeds below this (m/s) count as this when the damping is fixed at first touch,
+    /// so a contact that starts at rest gets a finite damping constant.
+    pub min_approach_speed: Real,
+}
+
+impl PairParameters {
+    /// Frictionless pair with the curved-contact `k` and restitution `e`.
+    pub fn new(a: &Material, b: &Material, restitution: Real) -> Result<Self> {
+        Ok(Self {
+            effective_modulus: effective_modulus(a, b),
+            stiffness: StiffnessFactor::Curved,
+            restitution: check_range("restitution", restitution, 0.0, false, 1.0, true, "0 < e <= 1")?,
+            friction: Friction::NONE,
+            min_approach_speed: 1e-3,
+        })
+    }
+
+    /// With friction.
+    pub fn with_friction(mut self, friction: Friction) -> Self {
+        self.friction = friction;
+        self
+    }
+
+    /// With another stiffness factor; a custom `k` must be finite and positive.
+    pub fn with_stiffness(mut self, stiffness: StiffnessFactor) -> Result<Self> {
+        if let StiffnessFactor::Custom(k) = stiffness {
+            check_positive("stiffness factor k", k)?;
+        }
+        self.stiffness = stiffness;
+        Ok(self)
+    }
+
+    /// With another floor for the approach speed at first touch (m/s, > 0).
+    pub fn with_min_approach_speed(mut self, v: Real) -> Result<Self> {
+        self.min_approach_speed = check_positive("min_approach_speed", v)?;
+        Ok(self)
+    }
+
+    /// Damping constant for a contact first seen at normal approach speed `v0`.
+    pub fn damping_for(&self, v0: Real) -> Real {
+        let v = if v0.is_finite() { v0.max(self.min_approach_speed) } else { self.min_approach_speed };
+        restitution_parameter(self.restitution) / v
+    }
+}

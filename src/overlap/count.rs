@@ -1,0 +1,75 @@
+//! The paper's integration (seed 000 §3.3.3): count the grid nodes inside both bodies.
+
+use super::{Grid, Integral, Pair};
+use crate::math::{Real, Vector};
+use crate::shape::Sdf;
+
+/// `sin 22.5°`: a gradient component larger than this points to a neighbour along that axis.
+const SECTOR: Real = 0.382_683_432_365_089_8;
+
+/// `grid` is the corrected box's grid with one extra node layer on every side; only the box's
+/// own nodes count for the volume.
+///
+/// Volume = inside nodes × cell volume; centroid = mean inside node; normal = area-weighted
+/// mean of the outward unit gradients on the first layer of nodes outside the overlap whose
+/// neighbour against the gradient is inside (B's surface counts `+∇d_B`, A's `-∇d_A`).
+pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    grid: &Grid,
+    values: &[(Real, Real)],
+) -> Integral {
+    let n = grid.n;
+    let inside = |i: usize, j: usize, k: usize| {
+        let (a, b) = values[grid.index(i, j, k)];
+        a.max(b) <= 0.0
+    };
+    let mut count = 0usize;
+    let mut sum = Vector::ZERO;
+    let mut normal = Vector::ZERO;
+    let mut area = 0.0;
+    let h = grid.h;
+    let face_area = Vector::new(h.y * h.z, h.x * h.z, h.x * h.y);
+    for k in 0..=n {
+        for j in 0..=n {
+            for i in 0..=n {
+                if inside(i, j, k) {
+                    let in_box = |v: usize| v >= 1 && v < n;
+                    if in_box(i) && in_box(j) && in_box(k) {
+                        count += 1;
+                        sum += grid.node(i, j, k);
+                    }
+                    continue;
+                }
+                let (da, db) = values[grid.index(i, j, k)];
+                // Only nodes next to the overlap can be on its surface layer.
+                let near = |i: usize, j: usize, k: usize| {
+                    let (lo, hi) = (|v: usize| v.saturating_sub(1), |v: usize| (v + 1).min(n));
+                    (lo(k)..=hi(k)).any(|kk| (lo(j)..=hi(j)).any(|jj| (lo(i)..=hi(i)).any(|ii| inside(ii, jj, kk))))
+                };
+                if !near(i, j, k) {
+                    continue;
+                }
+                let x = grid.node(i, j, k);
+                let (g, sign) = if db >= da { (pair.b.gradient(x), 1.0) } else { (pair.a.gradient(x), -1.0) };
+                let step = |c: Real| if c > SECTOR { -1i64 } else if c < -SECTOR { 1 } else { 0 };
+                let (si, sj, sk) = (i as i64 + step(g.x), j as i64 + step(g.y), k as i64 + step(g.z));
+                let ok = |v: i64| (0..=n as i64).contains(&v);
+                if (si, sj, sk) == (i as i64, j as i64, k as i64) || !(ok(si) && ok(sj) && ok(sk)) {
+                    continue;
+                }
+                if inside(si as usize, sj as usize, sk as usize) {
+                    let a_i = face_area.dot(g * g);
+                    normal += g * (sign * a_i);
+                    area += a_i;
+                }
+            }
+        }
+    }
+    let cell = h.x * h.y * h.z;
+    Integral {
+        volume: count as Real * cell,
+        centroid: if count > 0 { sum / count as Real } else { Vector::ZERO },
+        normal,
+        surface_area: area,
+    }
+}

@@ -1,0 +1,278 @@
+//! Sub-cell integration: the overlap's surface is located exactly on the cut edges of the grid
+//! and interpolated linearly between them, on the six tetrahedra of every cell it cuts.
+//!
+//! Each tetrahedron is clipped by A's surface and the pieces by B's. Where a clipped edge is a
+//! grid edge, the crossing is found by root finding on the exact SDF and cached (neighbouring
+//! cells share it, so the surface is watertight); other edges (only in cells both surfaces cut)
+//! are solved on the fly. Root finding instead of interpolating SDF values matters: inside a
+//! cylinder or a box the SDF has kinks (the nearest face changes), where interpolated values
+//! would misplace the surface by a large fraction of a cell. With exact crossings the error is
+//! the surface's curvature within a cell: second order.
+//!
+//! Volume and first moment of the clipped pieces are closed-form; cells wholly inside count
+//! whole, cells wholly outside cost nothing. The normal is the area vector of the surface
+//! facets: B's part (`d_B = 0` inside A) minus A's part — for a closed overlap both equal
+//! `|S| n`, so no gradient is evaluated.
+
+use super::{crossing, Grid, Integral, Pair};
+use crate::math::{Real, Vector};
+use crate::shape::Sdf;
+
+/// Kuhn decomposition of the unit cell (corner bits: x = 1, y = 2, z = 4) into six tetrahedra
+/// around the diagonal 0–7. Along each, the corner bits only grow, so every edge is a
+/// "forward" edge from its lower corner in direction `upper ^ lower` (1..=7).
+const TETS: [[usize; 4]; 6] = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]];
+
+/// No grid node: a point made by clipping.
+const NOT_A_NODE: u32 = u32::MAX;
+
+/// A vertex of a clipped piece: position, both distances, and its grid node if it is one.
+#[derive(Clone, Copy, Debug, Default)]
+struct Vert {
+    x: Vector,
+    d: [Real; 2],
+    node: u32,
+}
+
+/// Crossings of A's (0) and B's (1) surface on the forward edges of every node: the fraction
+/// along the edge and the other body's distance there; NaN until computed.
+struct EdgeCache {
+    t: [Vec<[(Real, Real); 7]>; 2],
+    m: usize,
+}
+
+impl EdgeCache {
+    fn new(nodes: usize, m: usize) -> Self {
+        let empty = vec![[(Real::NAN, Real::NAN); 7]; nodes];
+        Self { t: [empty.clone(), empty], m }
+    }
+
+    /// Direction code (1..=7) of the forward edge between nodes `lo < hi`.
+    fn dir(&self, lo: u32, hi: u32) -> usize {
+        let diff = (hi - lo) as usize;
+        let (m, m2) = (self.m, self.m * self.m);
+        let mut code = 0;
+        let mut rest = diff;
+        if rest >= m2 {
+            code |= 4;
+            rest -= m2;
+        }
+        if rest >= m {
+            code |= 2;
+            rest -= m;
+        }
+        if rest >= 1 {
+            code |= 1;
+        }
+        code
+    }
+}
+
+/// Up to three tetrahedra and the cut facet (up to four vertices), oriented by `outward`.
+#[derive(Default)]
+struct Clip {
+    tets: [[Vert; 4]; 3],
+    n_tets: usize,
+    facet: [Vert; 4],
+    n_facet: usize,
+    outward: Vector,
+}
+
+struct Integrator<'p, 'a, A: ?Sized, B: ?Sized> {
+    pair: &'p Pair<'a, A, B>,
+    cache: EdgeCache,
+    volume: Real,
+    moment: Vector,
+    normal: Vector,
+    area: Real,
+}
+
+#[inline]
+fn tet_volume(p: &[Vert; 4]) -> Real {
+    ((p[1].x - p[0].x).cross(p[2].x - p[0].x).dot(p[3].x - p[0].x)).abs() / 6.0
+}
+
+/// Area vector of a convex polygon (fan), oriented along `outward`.
+fn area_vector(poly: &[Vector], outward: Vector) -> Vector {
+    let mut a = Vector::ZERO;
+    for i in 1..poly.len().saturating_sub(1) {
+        a += (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]);
+    }
+    a *= 0.5;
+    if a.dot(outward) < 0.0 {
+        -a
+    } else {
+        a
+    }
+}
+
+impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Integrator<'_, '_, A, B> {
+    fn distance(&self, s: usize, x: Vector) -> Real {
+        if s == 0 {
+            self.pair.a.distance(x)
+        } else {
+            self.pair.b.distance(x)
+        }
+    }
+
+    /// The point where body `s`'s surface crosses the edge `p`–`q` (`p` inside, `q` outside).
+    fn cut(&mut self, s: usize, p: Vert, q: Vert) -> Vert {
+        let o = 1 - s;
+        let (lo, hi) = if p.node < q.node { (p, q) } else { (q, p) };
+        let cached = hi.node != NOT_A_NODE;
+        let slot = if cached { Some((lo.node as usize, self.cache.dir(lo.node, hi.node) - 1)) } else { None };
+        if let Some((n, k)) = slot {
+            let (t, other) = self.cache.t[s][n][k];
+            if !t.is_nan() {
+                let mut d = [0.0; 2];
+                d[o] = other;
+                return Vert { x: lo.x + (hi.x - lo.x) * t, d, node: NOT_A_NODE };
+            }
+        }
+        let e = hi.x - lo.x;
+        let f = |t: Real| self.distance(s, lo.x + e * t);
+        let t = crossing(f, (0.0, lo.d[s]), (1.0, hi.d[s]), 1e-9);
+        let x = lo.x + e * t;
+        let other = self.distance(o, x);
+        if let Some((n, k)) = slot {
+            self.cache.t[s][n][k] = (t, other);
+        }
+        let mut d = [0.0; 2];
+        d[o] = other;
+        Vert { x, d, node: NOT_A_NODE }
+    }
+
+    /// Keeps the part of tetrahedron `p` inside body `s`.
+    fn clip(&mut self, s: usize, p: [Vert; 4]) -> Clip {
+        let mut out = Clip::default();
+        let (mut neg, mut pos) = ([0usize; 4], [0usize; 4]);
+        let (mut nn, mut np) = (0, 0);
+        for i in 0..4 {
+            if p[i].d[s] <= 0.0 {
+                neg[nn] = i;
+                nn += 1;
+            } else {
+                pos[np] = i;
+                np += 1;
+            }
+        }
+        match nn {
+            0 => return out,
+            4 => {
+                out.tets[0] = p;
+                out.n_tets = 1;
+                return out;
+            }
+            1 => {
+                let (i, [a, b, c]) = (neg[0], [pos[0], pos[1], pos[2]]);
+                let q = [self.cut(s, p[i], p[a]), self.cut(s, p[i], p[b]), self.cut(s, p[i], p[c])];
+                out.tets[0] = [p[i], q[0], q[1], q[2]];
+                out.n_tets = 1;
+                out.facet[..3].copy_from_slice(&q);
+                out.n_facet = 3;
+            }
+            3 => {
+                // Prism (a, b, c) – (qa, qb, qc) as three tetrahedra.
+                let (i, [a, b, c]) = (pos[0], [neg[0], neg[1], neg[2]]);
+                let q = [self.cut(s, p[a], p[i]), self.cut(s, p[b], p[i]), self.cut(s, p[c], p[i])];
+                out.tets = [[p[a], p[b], p[c], q[2]], [p[a], p[b], q[1], q[2]], [p[a], q[0], q[1], q[2]]];
+                out.n_tets = 3;
+                out.facet[..3].copy_from_slice(&q);
+                out.n_facet = 3;
+            }
+            _ => {
+                // Wedge (a, ac, ad) – (b, bc, bd) as three tetrahedra.
+                let ([a, b], [c, d]) = ([neg[0], neg[1]], [pos[0], pos[1]]);
+                let (ac, ad) = (self.cut(s, p[a], p[c]), self.cut(s, p[a], p[d]));
+                let (bc, bd) = (self.cut(s, p[b], p[c]), self.cut(s, p[b], p[d]));
+                out.tets = [[p[a], ac, ad, bd], [p[a], ac, bc, bd], [p[a], p[b], bc, bd]];
+                out.n_tets = 3;
+                out.facet = [ac, bc, bd, ad];
+                out.n_facet = 4;
+            }
+        }
+        let mean = |idx: &[usize]| idx.iter().map(|&i| p[i].x).sum::<Vector>() / idx.len() as Real;
+        out.outward = mean(&pos[..np]) - mean(&neg[..nn]);
+        out
+    }
+
+    /// The overlap inside one tetrahedron of grid nodes.
+    fn tet(&mut self, p: [Vert; 4]) {
+        let in_a = self.clip(0, p);
+        for q in 0..in_a.n_tets {
+            let both = self.clip(1, in_a.tets[q]);
+            for r in &both.tets[..both.n_tets] {
+                let v = tet_volume(r);
+                self.volume += v;
+                self.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
+            }
+            if both.n_facet > 0 {
+                let poly: [Vector; 4] = both.facet.map(|v| v.x);
+                let a = area_vector(&poly[..both.n_facet], both.outward);
+                self.normal += a; // B's outward normal points from B to A.
+                self.area += a.length();
+            }
+        }
+        if in_a.n_facet > 0 {
+            // A's facet where it is inside B (B's distance is exact at its vertices).
+            let f = &in_a.facet[..in_a.n_facet];
+            let mut poly = [Vector::ZERO; 5];
+            let mut m = 0;
+            for i in 0..f.len() {
+                let (p, q) = (f[i], f[(i + 1) % f.len()]);
+                if p.d[1] <= 0.0 {
+                    poly[m] = p.x;
+                    m += 1;
+                }
+                if (p.d[1] <= 0.0) != (q.d[1] <= 0.0) {
+                    poly[m] = p.x + (q.x - p.x) * (p.d[1] / (p.d[1] - q.d[1]));
+                    m += 1;
+                }
+            }
+            if m >= 3 {
+                let a = area_vector(&poly[..m], in_a.outward);
+                self.normal -= a; // A's outward normal points from A to B.
+                self.area += a.length();
+            }
+        }
+    }
+}
+
+/// Integrates the overlap on `grid` from node values `(d_A, d_B)`.
+pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, grid: &Grid, values: &[(Real, Real)]) -> Integral {
+    let n = grid.n;
+    let m = n + 1;
+    let h = grid.h;
+    let cell = h.x * h.y * h.z;
+    let mut it = Integrator { pair, cache: EdgeCache::new(values.len(), m), volume: 0.0, moment: Vector::ZERO, normal: Vector::ZERO, area: 0.0 };
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let corners: [Vert; 8] = core::array::from_fn(|c| {
+                    let (ci, cj, ck) = (i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+                    let node = grid.index(ci, cj, ck);
+                    let (da, db) = values[node];
+                    Vert { x: grid.node(ci, cj, ck), d: [da, db], node: node as u32 }
+                });
+                let all = |s: usize, inside: bool| corners.iter().all(|v| (v.d[s] <= 0.0) == inside);
+                if all(0, false) || all(1, false) {
+                    continue;
+                }
+                if all(0, true) && all(1, true) {
+                    it.volume += cell;
+                    it.moment += (corners[0].x + h * 0.5) * cell;
+                    continue;
+                }
+                for tet in TETS {
+                    it.tet(tet.map(|c| corners[c]));
+                }
+            }
+        }
+    }
+    Integral {
+        volume: it.volume,
+        centroid: if it.volume > 0.0 { it.moment / it.volume } else { Vector::ZERO },
+        normal: it.normal,
+        surface_area: it.area,
+    }
+}

@@ -1,0 +1,487 @@
+//! Convex shapes as signed distance functions (SDFs).
+//!
+//! Every shape is evaluated in its own body frame: [`Sdf::distance`] is negative inside, positive
+//! outside, and its magnitude is the Euclidean distance to the surface on *both* sides (an exact
+//! SDF). The overlap geometry relies on this: `max(d_A, d_B)` is then a 1-Lipschitz lower bound
+//! of the distance to the overlap region, so sphere tracing never steps through it.
+//!
+//! Built-in shapes ([`ConvexShape`]) have closed-form distances and gradients; parry shapes are
+//! converted with [`ConvexShape::from_parry`]; any other convex body is a user closure
+//! ([`ConvexShape::custom`]).
+
+use std::fmt;
+use std::sync::Arc;
+
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::shape::{Shape, TypedShape};
+
+use crate::error::{check_finite_vec, check_positive, Error, Result};
+use crate::math::{Real, Vector};
+
+/// A signed distance function of a convex body, in the body's own frame.
+pub trait Sdf: Send + Sync {
+    /// Signed distance from `p` (body frame) to the surface: negative inside.
+    fn distance(&self, p: Vector) -> Real;
+
+    /// Outward unit gradient of the distance at `p` (body frame).
+    ///
+    /// The default uses central differences with a step of `1e-7` times the body's size.
+    fn gradient(&self, p: Vector) -> Vector {
+        let b = self.local_bounds();
+        let size = (b.maxs - b.mins).min_element();
+        let h = if size.is_finite() && size > 0.0 { 1e-7 * size } else { 1e-7 * (1.0 + p.abs().max_element()) };
+        let g = Vector::new(
+            self.distance(p + Vector::X * h) - self.distance(p - Vector::X * h),
+            self.distance(p + Vector::Y * h) - self.distance(p - Vector::Y * h),
+            self.distance(p + Vector::Z * h) - self.distance(p - Vector::Z * h),
+        );
+        g.normalize_or_zero()
+    }
+
+    /// Bounding box of the body in its frame; components may be infinite (a half-space).
+    fn local_bounds(&self) -> Aabb;
+}
+
+/// Exact 2D signed distance to a convex polygon given counter-clockwise, with its gradient.
+fn polygon_sdf_2d(p: [Real; 2], poly: &[[Real; 2]]) -> (Real, [Real; 2]) {
+    let n = poly.len();
+    let mut inside_max = Real::NEG_INFINITY;
+    let mut inside_grad = [0.0, 0.0];
+    let mut best_out = Real::INFINITY;
+    let mut out_grad = [0.0, 0.0];
+    let mut outside = false;
+    for i in 0..n {
+        let a = poly[i];
+        let b = poly[(i + 1) % n];
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let len = (e[0] * e[0] + e[1] * e[1]).sqrt();
+        let nrm = [e[1] / len, -e[0] / len]; // outward for CCW
+        let w = [p[0] - a[0], p[1] - a[1]];
+        let s = w[0] * nrm[0] + w[1] * nrm[1];
+        if s > inside_max {
+            inside_max = s;
+            inside_grad = nrm;
+        }
+        if s > 0.0 {
+            outside = true;
+        }
+        let t = ((w[0] * e[0] + w[1] * e[1]) / (len * len)).clamp(0.0, 1.0);
+        let c = [w[0] - t * e[0], w[1] - t * e[1]];
+        let d = (c[0] * c[0] + c[1] * c[1]).sqrt();
+        if d < best_out {
+            best_out = d;
+            out_grad = if d > 0.0 { [c[0] / d, c[1] / d] } else { nrm };
+        }
+    }
+    if outside {
+        (best_out, out_grad)
+    } else {
+        (inside_max, inside_grad)
+    }
+}
+
+/// A convex polyhedron with an exact SDF: inside, the largest face-plane distance; outside,
+/// the distance to the nearest visible face polygon.
+#[derive(Clone, Debug)]
+pub struct PolyhedronSdf {
+    /// Outward unit normal and offset of each face plane (`n·p - offset` is the plane distance).
+    planes: Vec<(Vector, Real)>,
+    /// Each face's vertices, ordered around the face.
+    faces: Vec<Vec<Vector>>,
+    bounds: Aabb,
+}
+
+impl PolyhedronSdf {
+    /// Builds the SDF of the convex hull of `points` (at least 4 points, not coplanar).
+    pub fn from_points(points: &[Vector]) -> Result<Self> {
+        for p in points {
+            check_finite_vec("polyhedron vertex", *p)?;
+        }
+        let hull = parry3d_f64::shape::ConvexPolyhedron::from_convex_hull(points).ok_or(Error::UnsupportedShape {
+            shape: "ConvexPolyhedron".into(),
+            why: "the points do not span a volume (need at least 4 non-coplanar points)",
+        })?;
+        Ok(Self::from_parry(&hull))
+    }
+
+    /// Builds the SDF of a parry convex polyhedron.
+    pub fn from_parry(poly: &parry3d_f64::shape::ConvexPolyhedron) -> Self {
+        let pts = poly.points();
+        let adj = poly.vertices_adj_to_face();
+        let mut planes = Vec::with_capacity(poly.faces().len());
+        let mut faces = Vec::with_capacity(poly.faces().len());
+        for f in poly.faces() {
+            let first = f.first_vertex_or_edge as usize;
+            let mut verts: Vec<Vector> =
+                adj[first..first + f.num_vertices_or_edges as usize].iter().map(|&i| pts[i as usize]).collect();
+            let n = f.normal;
+            let centre = verts.iter().copied().sum::<Vector>() / verts.len() as Real;
+            // Order the vertices counter-clockwise about the outward normal.
+            let u = (verts[0] - centre).normalize_or_zero();
+            let v = n.cross(u);
+            verts.sort_by(|a, b| {
+                let (da, db) = (*a - centre, *b - centre);
+                let aa = da.dot(v).atan2(da.dot(u));
+                let ab = db.dot(v).atan2(db.dot(u));
+                aa.total_cmp(&ab)
+            });
+            planes.push((n, n.dot(centre)));
+            faces.push(verts);
+        }
+        let mut mins = Vector::splat(Real::INFINITY);
+        let mut maxs = Vector::splat(Real::NEG_INFINITY);
+        for p in pts {
+            mins = mins.min(*p);
+            maxs = maxs.max(*p);
+        }
+        Self { planes, faces, bounds: Aabb::new(mins, maxs) }
+    }
+
+    /// Distance and outward gradient.
+    fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
+        let mut best = (Real::NEG_INFINITY, Vector::Y);
+        for (n, off) in &self.planes {
+            let s = n.dot(p) - off;
+            if s > best.0 {
+                best = (s, *n);
+            }
+        }
+        if best.0 <= 0.0 {
+            return best;
+        }
+        // Outside: the nearest point lies on a face whose plane sees p.
+        let mut out = (Real::INFINITY, best.1);
+        for ((n, off), verts) in self.planes.iter().zip(&self.faces) {
+            let s = n.dot(p) - off;
+            if s <= 0.0 {
+                continue;
+            }
+            let proj = p - *n * s;
+            let m = verts.len();
+            let inside = (0..m).all(|i| (verts[(i + 1) % m] - verts[i]).cross(proj - verts[i]).dot(*n) >= 0.0);
+            let (d, q) = if inside {
+                (s, proj)
+            } else {
+                (0..m)
+                    .map(|i| {
+                        let q = closest_on_segment(p, verts[i], verts[(i + 1) % m]);
+                        ((p - q).length(), q)
+                    })
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .unwrap()
+            };
+            if d < out.0 {
+                out = (d, if d > 0.0 { (p - q) / d } else { *n });
+            }
+        }
+        out
+    }
+}
+
+fn closest_on_segment(p: Vector, a: Vector, b: Vector) -> Vector {
+    let e = b - a;
+    let l2 = e.length_squared();
+    let t = if l2 > 0.0 { ((p - a).dot(e) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    a + e * t
+}
+
+/// A user-supplied SDF: a closure plus the body's bounds.
+#[derive(Clone)]
+pub struct CustomSdf {
+    f: Arc<dyn Fn(Vector) -> Real + Send + Sync>,
+    bounds: Aabb,
+}
+
+impl fmt::Debug for CustomSdf {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("CustomSdf").field("bounds", &self.bounds).finish_non_exhaustive()
+    }
+}
+
+impl Sdf for CustomSdf {
+    fn distance(&self, p: Vector) -> Real {
+        (self.f)(p)
+    }
+    fn local_bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
+/// A convex body with a closed-form (or user) signed distance function.
+///
+/// Cylinders and cones have their axis along the body's `y` axis, as in parry.
+#[derive(Clone, Debug)]
+pub enum ConvexShape {
+    /// A sphere of the given radius about the origin.
+    Ball {
+        /// Radius (m).
+        radius: Real,
+    },
+    /// A box with the given half extents.
+    Cuboid {
+        /// Half extents along x, y, z (m).
+        half_extents: Vector,
+    },
+    /// A cylinder along `y`.
+    Cylinder {
+        /// Half the height (m).
+        half_height: Real,
+        /// Radius (m).
+        radius: Real,
+    },
+    /// A cone along `y`, apex at `+half_height`.
+    Cone {
+        /// Half the height (m).
+        half_height: Real,
+        /// Base radius (m).
+        radius: Real,
+    },
+    /// A capsule: all points within `radius` of the segment `a`–`b`.
+    Capsule {
+        /// First end of the segment (m).
+        a: Vector,
+        /// Second end of the segment (m).
+        b: Vector,
+        /// Radius (m).
+        radius: Real,
+    },
+    /// A convex polyhedron.
+    Polyhedron(Arc<PolyhedronSdf>),
+    /// The inner shape dilated by a border radius (parry's `Round*` shapes).
+    Rounded {
+        /// The shape before rounding.
+        inner: Box<ConvexShape>,
+        /// The dilation (m).
+        border_radius: Real,
+    },
+    /// The half-space below the plane through the origin with outward unit normal `normal`.
+    HalfSpace {
+        /// Outward unit normal.
+        normal: Vector,
+    },
+    /// A user SDF (must be exact — Euclidean inside and outside — for the guarantees above).
+    Custom(CustomSdf),
+}
+
+impl ConvexShape {
+    /// A sphere; refuses a radius that is not finite and positive.
+    pub fn ball(radius: Real) -> Result<Self> {
+        Ok(Self::Ball { radius: check_positive("radius", radius)? })
+    }
+
+    /// A box with the given half extents.
+    pub fn cuboid(half_extents: Vector) -> Result<Self> {
+        for (name, v) in [("half_extents.x", half_extents.x), ("half_extents.y", half_extents.y), ("half_extents.z", half_extents.z)] {
+            check_positive(name, v)?;
+        }
+        Ok(Self::Cuboid { half_extents })
+    }
+
+    /// A cylinder along `y`.
+    pub fn cylinder(half_height: Real, radius: Real) -> Result<Self> {
+        Ok(Self::Cylinder { half_height: check_positive("half_height", half_height)?, radius: check_positive("radius", radius)? })
+    }
+
+    /// A cone along `y`.
+    pub fn cone(half_height: Real, radius: Real) -> Result<Self> {
+        Ok(Self::Cone { half_height: check_positive("half_height", half_height)?, radius: check_positive("radius", radius)? })
+    }
+
+    /// A capsule around the segment `a`–`b`.
+    pub fn capsule(a: Vector, b: Vector, radius: Real) -> Result<Self> {
+        check_finite_vec("capsule end a", a)?;
+        check_finite_vec("capsule end b", b)?;
+        Ok(Self::Capsule { a, b, radius: check_positive("radius", radius)? })
+    }
+
+    /// The convex hull of `points`.
+    pub fn convex_hull(points: &[Vector]) -> Result<Self> {
+        Ok(Self::Polyhedron(Arc::new(PolyhedronSdf::from_points(points)?)))
+    }
+
+    /// `inner` dilated by `border_radius`.
+    pub fn rounded(inner: ConvexShape, border_radius: Real) -> Result<Self> {
+        Ok(Self::Rounded { inner: Box::new(inner), border_radius: check_positive("border_radius", border_radius)? })
+    }
+
+    /// The half-space `{p : normal·p <= 0}`; `normal` is normalised.
+    pub fn half_space(normal: Vector) -> Result<Self> {
+        check_finite_vec("half-space normal", normal)?;
+        let n = normal.try_normalize().ok_or(Error::InvalidParameter {
+            name: "normal",
+            value: normal.length(),
+            allowed: "a non-zero vector",
+        })?;
+        Ok(Self::HalfSpace { normal: n })
+    }
+
+    /// A user SDF `f` (body frame, negative inside, exact) with the body's bounding box.
+    pub fn custom(f: impl Fn(Vector) -> Real + Send + Sync + 'static, bounds: Aabb) -> Result<Self> {
+        check_finite_vec("custom SDF bounds (mins)", bounds.mins)?;
+        check_finite_vec("custom SDF bounds (maxs)", bounds.maxs)?;
+        let w = bounds.maxs - bounds.mins;
+        check_positive("custom SDF bounds width", w.min_element())?;
+        Ok(Self::Custom(CustomSdf { f: Arc::new(f), bounds }))
+    }
+
+    /// Converts a parry shape. Supported: Ball, Cuboid, Cylinder, Cone, Capsule,
+    /// ConvexPolyhedron, their `Round*` variants and HalfSpace.
+    pub fn from_parry(shape: &dyn Shape) -> Result<Self> {
+        let unsupported = |name: &str| Error::UnsupportedShape {
+            shape: name.to_string(),
+            why: "not a convex solid; decompose it into convex pieces (ConvexPolyhedron) or give a custom SDF",
+        };
+        Ok(match shape.as_typed_shape() {
+            TypedShape::Ball(b) => Self::ball(b.radius)?,
+            TypedShape::Cuboid(c) => Self::cuboid(c.half_extents)?,
+            TypedShape::Cylinder(c) => Self::cylinder(c.half_height, c.radius)?,
+            TypedShape::Cone(c) => Self::cone(c.half_height, c.radius)?,
+            TypedShape::Capsule(c) => Self::capsule(c.segment.a, c.segment.b, c.radius)?,
+            TypedShape::ConvexPolyhedron(p) => Self::Polyhedron(Arc::new(PolyhedronSdf::from_parry(p))),
+            TypedShape::HalfSpace(h) => Self::half_space(h.normal)?,
+            TypedShape::RoundCuboid(r) => Self::rounded(Self::cuboid(r.inner_shape.half_extents)?, r.border_radius)?,
+            TypedShape::RoundCylinder(r) => {
+                Self::rounded(Self::cylinder(r.inner_shape.half_height, r.inner_shape.radius)?, r.border_radius)?
+            }
+            TypedShape::RoundCone(r) => Self::rounded(Self::cone(r.inner_shape.half_height, r.inner_shape.radius)?, r.border_radius)?,
+            TypedShape::RoundConvexPolyhedron(r) => {
+                Self::rounded(Self::Polyhedron(Arc::new(PolyhedronSdf::from_parry(&r.inner_shape))), r.border_radius)?
+            }
+            other => return Err(unsupported(&format!("{:?}", shape_type_name(&other)))),
+        })
+    }
+
+    /// Whether the body is unbounded (a half-space).
+    pub fn is_unbounded(&self) -> bool {
+        matches!(self, Self::HalfSpace { .. })
+    }
+
+    /// Distance and outward unit gradient, in closed form.
+    pub fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
+        match self {
+            Self::Ball { radius } => {
+                let l = p.length();
+                (l - radius, if l > 0.0 { p / l } else { Vector::Y })
+            }
+            Self::Cuboid { half_extents } => {
+                let q = p.abs() - *half_extents;
+                let qo = q.max(Vector::ZERO);
+                let out = qo.length();
+                if out > 0.0 {
+                    (out, (qo * p.signum()) / out)
+                } else {
+                    let m = q.max_element();
+                    let axis = if q.x == m { Vector::X } else if q.y == m { Vector::Y } else { Vector::Z };
+                    (m, axis * p.signum())
+                }
+            }
+            Self::Cylinder { half_height, radius } => {
+                let r = (p.x * p.x + p.z * p.z).sqrt();
+                let (qx, qy) = (r - radius, p.y.abs() - half_height);
+                let radial = if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X };
+                let axial = Vector::new(0.0, p.y.signum(), 0.0);
+                let (ox, oy) = (qx.max(0.0), qy.max(0.0));
+                let out = (ox * ox + oy * oy).sqrt();
+                if out > 0.0 {
+                    (out, (radial * ox + axial * oy) / out)
+                } else if qx > qy {
+                    (qx, radial)
+                } else {
+                    (qy, axial)
+                }
+            }
+            Self::Cone { half_height, radius } => {
+                let r = (p.x * p.x + p.z * p.z).sqrt();
+                let tri = [[-radius, -half_height], [*radius, -half_height], [0.0, *half_height]];
+                let (d, g) = polygon_sdf_2d([r, p.y], &tri);
+                let radial = if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X };
+                (d, radial * g[0] + Vector::Y * g[1])
+            }
+            Self::Capsule { a, b, radius } => {
+                let q = closest_on_segment(p, *a, *b);
+                let l = (p - q).length();
+                (l - radius, if l > 0.0 { (p - q) / l } else { Vector::Y })
+            }
+            Self::Polyhedron(poly) => poly.distance_and_gradient(p),
+            Self::Rounded { inner, border_radius } => {
+                let (d, g) = inner.distance_and_gradient(p);
+                (d - border_radius, g)
+            }
+            Self::HalfSpace { normal } => (normal.dot(p), *normal),
+            Self::Custom(c) => (c.distance(p), c.gradient(p)),
+        }
+    }
+}
+
+fn shape_type_name(s: &TypedShape<'_>) -> &'static str {
+    match s {
+        TypedShape::Segment(_) => "Segment",
+        TypedShape::Triangle(_) => "Triangle",
+        TypedShape::TriMesh(_) => "TriMesh",
+        TypedShape::Polyline(_) => "Polyline",
+        TypedShape::HeightField(_) => "HeightField",
+        TypedShape::Compound(_) => "Compound",
+        TypedShape::Voxels(_) => "Voxels",
+        TypedShape::RoundTriangle(_) => "RoundTriangle",
+        _ => "Shape",
+    }
+}
+
+impl Sdf for ConvexShape {
+    #[inline]
+    fn distance(&self, p: Vector) -> Real {
+        match self {
+            Self::Ball { radius } => p.length() - radius,
+            Self::Cuboid { half_extents } => {
+                let q = p.abs() - *half_extents;
+                q.max(Vector::ZERO).length() + q.max_element().min(0.0)
+            }
+            Self::Cylinder { half_height, radius } => {
+                let r = (p.x * p.x + p.z * p.z).sqrt();
+                let (qx, qy) = (r - radius, p.y.abs() - half_height);
+                let (ox, oy) = (qx.max(0.0), qy.max(0.0));
+                (ox * ox + oy * oy).sqrt() + qx.max(qy).min(0.0)
+            }
+            Self::HalfSpace { normal } => normal.dot(p),
+            Self::Rounded { inner, border_radius } => inner.distance(p) - border_radius,
+            Self::Custom(c) => c.distance(p),
+            _ => self.distance_and_gradient(p).0,
+        }
+    }
+
+    fn gradient(&self, p: Vector) -> Vector {
+        self.distance_and_gradient(p).1
+    }
+
+    fn local_bounds(&self) -> Aabb {
+        match self {
+            Self::Ball { radius } => Aabb::new(Vector::splat(-radius), Vector::splat(*radius)),
+            Self::Cuboid { half_extents } => Aabb::new(-*half_extents, *half_extents),
+            Self::Cylinder { half_height, radius } | Self::Cone { half_height, radius } => {
+                let h = Vector::new(*radius, *half_height, *radius);
+                Aabb::new(-h, h)
+            }
+            Self::Capsule { a, b, radius } => Aabb::new(a.min(*b) - Vector::splat(*radius), a.max(*b) + Vector::splat(*radius)),
+            Self::Polyhedron(p) => p.bounds,
+            Self::Rounded { inner, border_radius } => {
+                let b = inner.local_bounds();
+                Aabb::new(b.mins - Vector::splat(*border_radius), b.maxs + Vector::splat(*border_radius))
+            }
+            Self::HalfSpace { normal } => {
+                // Bounded only along an axis-aligned normal.
+                let mut maxs = Vector::splat(Real::INFINITY);
+                let mut mins = Vector::splat(Real::NEG_INFINITY);
+                for j in 0..3 {
+                    let e = Vector::AXES[j];
+                    if (normal.dot(e) - 1.0).abs() < 1e-12 {
+                        maxs[j] = 0.0;
+                    } else if (normal.dot(e) + 1.0).abs() < 1e-12 {
+                        mins[j] = 0.0;
+                    }
+                }
+                Aabb::new(mins, maxs)
+            }
+            Self::Custom(c) => c.bounds,
+        }
+    }
+}

@@ -1,0 +1,3 @@
+//! Validation cases with analytical solutions, shared by the examples and the tests.
+
+pub mod hertz;
