@@ -101,7 +101,25 @@ impl PolyhedronSdf {
             shape: "ConvexPolyhedron".into(),
             why: "the points do not span a volume (need at least 4 non-coplanar points)",
         })?;
-        Ok(Self::from_parry(&hull))
+        let sdf = Self::from_parry(&hull);
+        // Divergence theorem: V = Σ offset·area / 3 over the faces.
+        let volume: Real = sdf
+            .planes
+            .iter()
+            .zip(&sdf.faces)
+            .map(|((n, off), v)| {
+                let area = (1..v.len() - 1).map(|i| (v[i] - v[0]).cross(v[i + 1] - v[0]).dot(*n)).sum::<Real>() * 0.5;
+                off * area / 3.0
+            })
+            .sum();
+        let size = (sdf.bounds.maxs - sdf.bounds.mins).length();
+        if !(volume > 1e-12 * size * size * size) {
+            return Err(Error::UnsupportedShape {
+                shape: "ConvexPolyhedron".into(),
+                why: "the points do not span a volume (need at least 4 non-coplanar points)",
+            });
+        }
+        Ok(sdf)
     }
 
     /// Builds the SDF of a parry convex polyhedron.

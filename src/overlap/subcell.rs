@@ -196,44 +196,41 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Integrator<'_, '_, A, B> {
         out
     }
 
-    /// The overlap inside one tetrahedron of grid nodes.
-    fn tet(&mut self, p: [Vert; 4]) {
-        let in_a = self.clip(0, p);
-        for q in 0..in_a.n_tets {
-            let both = self.clip(1, in_a.tets[q]);
-            for r in &both.tets[..both.n_tets] {
-                let v = tet_volume(r);
+    /// Clips `p` by body `first`, then by the other: adds half the volume and moment (the
+    /// other order adds the other half) and the other body's facets to the normal.
+    fn ordered(&mut self, first: usize, p: [Vert; 4], weight: Real) {
+        let second = 1 - first;
+        let outer = self.clip(first, p);
+        // B's outward normal points from B to A, A's from A to B.
+        let sign = if second == 1 { 1.0 } else { -1.0 };
+        for q in 0..outer.n_tets {
+            let inner = self.clip(second, outer.tets[q]);
+            for r in &inner.tets[..inner.n_tets] {
+                let v = tet_volume(r) * weight;
                 self.volume += v;
                 self.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
             }
-            if both.n_facet > 0 {
-                let poly: [Vector; 4] = both.facet.map(|v| v.x);
-                let a = area_vector(&poly[..both.n_facet], both.outward);
-                self.normal += a; // B's outward normal points from B to A.
+            if inner.n_facet > 0 {
+                let poly: [Vector; 4] = inner.facet.map(|v| v.x);
+                let a = area_vector(&poly[..inner.n_facet], inner.outward);
+                self.normal += a * sign;
                 self.area += a.length();
             }
         }
-        if in_a.n_facet > 0 {
-            // A's facet where it is inside B (B's distance is exact at its vertices).
-            let f = &in_a.facet[..in_a.n_facet];
-            let mut poly = [Vector::ZERO; 5];
-            let mut m = 0;
-            for i in 0..f.len() {
-                let (p, q) = (f[i], f[(i + 1) % f.len()]);
-                if p.d[1] <= 0.0 {
-                    poly[m] = p.x;
-                    m += 1;
-                }
-                if (p.d[1] <= 0.0) != (q.d[1] <= 0.0) {
-                    poly[m] = p.x + (q.x - p.x) * (p.d[1] / (p.d[1] - q.d[1]));
-                    m += 1;
-                }
-            }
-            if m >= 3 {
-                let a = area_vector(&poly[..m], in_a.outward);
-                self.normal -= a; // A's outward normal points from A to B.
-                self.area += a.length();
-            }
+    }
+
+    /// The overlap inside one tetrahedron of grid nodes. Where only one surface cuts it, one
+    /// clip does; where both do (the rim), both clipping orders run and are averaged, so the
+    /// result does not depend on which body is A.
+    fn tet(&mut self, p: [Vert; 4]) {
+        let inside = |s: usize| p.iter().all(|v| v.d[s] <= 0.0);
+        if inside(0) {
+            self.ordered(0, p, 1.0);
+        } else if inside(1) {
+            self.ordered(1, p, 1.0);
+        } else {
+            self.ordered(0, p, 0.5);
+            self.ordered(1, p, 0.5);
         }
     }
 }
