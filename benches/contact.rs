@@ -1,1 +1,57 @@
-fn main(){}
+//! Time per contact evaluation (overlap geometry + force) for three pair types, both
+//! integration modes, N_c = 4, 8, 16. Each evaluation starts from the bodies' bounding boxes
+//! (a first touch), the most expensive case.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use discrete_contact::prelude::*;
+
+fn pairs() -> Vec<(&'static str, ConvexShape, Pose, ConvexShape, Pose)> {
+    let tilt = Rotation::from_axis_angle(Vector::new(1.0, 0.0, 1.0).normalize(), 0.4);
+    vec![
+        (
+            "sphere_sphere",
+            ConvexShape::ball(0.01).unwrap(),
+            Pose::from_translation(Vector::new(0.001, 0.0198, 0.0)),
+            ConvexShape::ball(0.01).unwrap(),
+            Pose::IDENTITY,
+        ),
+        (
+            "cylinder_plane",
+            ConvexShape::cylinder(0.00265, 0.004).unwrap(),
+            Pose::from_parts(Vector::new(0.0, 0.0039, 0.0), tilt),
+            ConvexShape::half_space(Vector::Y).unwrap(),
+            Pose::IDENTITY,
+        ),
+        (
+            "cube_cube",
+            ConvexShape::cuboid(Vector::splat(0.005)).unwrap(),
+            Pose::from_parts(Vector::new(0.001, 0.0098, 0.0), Rotation::from_rotation_y(0.3)),
+            ConvexShape::cuboid(Vector::splat(0.005)).unwrap(),
+            Pose::IDENTITY,
+        ),
+    ]
+}
+
+fn bench(c: &mut Criterion) {
+    let m = Material::new(5e8, 0.35).unwrap();
+    let params = PairParameters::new(&m, &m, 0.85).unwrap();
+    let mut group = c.benchmark_group("contact_evaluation");
+    group.sample_size(20).measurement_time(std::time::Duration::from_secs(2)).warm_up_time(std::time::Duration::from_millis(300));
+    for (name, sa, pa, sb, pb) in pairs() {
+        for mode in [IntegrationMode::Count, IntegrationMode::Subcell] {
+            for n in [4usize, 8, 16] {
+                let model = ContactModel::new(params, OverlapSettings::new(n, mode).unwrap());
+                let a = BodyState::at_rest(&sa, pa).moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO);
+                let b = BodyState::at_rest(&sb, pb);
+                assert!(model.evaluate(&a, &b, &mut None).unwrap().is_some(), "{name} must overlap");
+                group.bench_with_input(BenchmarkId::new(format!("{name}/{}", mode.name()), n), &n, |bch, _| {
+                    bch.iter(|| model.evaluate(&a, &b, &mut None).unwrap())
+                });
+            }
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

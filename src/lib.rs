@@ -48,6 +48,11 @@ pub mod overlap;
 pub mod shape;
 pub mod validation;
 
+/// The README's example, compiled and run as a doc test.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
+
 pub use contact::{BodyState, ContactModel, ContactOutput, ContactState};
 pub use error::{Error, Result};
 pub use force::{contact_force, normal_force, BodyKinematics, ContactForce};
