@@ -1,0 +1,553 @@
+//! The lattice: storage, boundaries and the fused stream–collide sweep (A-A pattern).
+//!
+//! **Layout.** Structure of arrays: `f[i * n + cell]`, `cell = (z * ny + y) * nx + x`, so each
+//! population is contiguous along `x` and a block of [`LANES`] cells loads as one vector.
+//!
+//! **A-A pattern** (Bailey et al. 2009): one array, updated in place. Even steps read the 19
+//! populations of a cell from its own slots and write the post-collision values back swapped
+//! (`f*_i` into slot `ī`). Odd steps pull `f_i` from slot `ī` of `x - c_i` and push `f*_i`
+//! into slot `i` of `x + c_i`. Every cell reads and writes only its own 19 locations, so a sweep
+//! needs no second lattice (304 B of traffic per cell update, no write-allocate) and cells can
+//! be processed in any order or in parallel with identical results.
+//!
+//! **Walls** are solid nodes (halfway bounce-back, optionally moving): in odd steps a
+//! population that would come from or go to a solid node is taken from or put into the cell's
+//! own opposite slot. Only rows next to a solid node take this slower path.
+//!
+//! **Periodic** boundaries are index wrap-around; a non-periodic axis must be closed by solid
+//! layers, which [`Lattice::check_closed`] verifies.
+
+use std::collections::BTreeMap;
+
+use rayon::prelude::*;
+
+use crate::d3q19::{collide, equilibrium, C, LANES, OPP, Q, W};
+use crate::error::{Error, Result};
+use crate::particles::ParticleField;
+
+/// Fluid or solid (wall) node: 0 is fluid, 1 a resting wall, `k > 1` a wall made by
+/// [`Lattice::add_wall`].
+pub type NodeKind = u8;
+
+/// Force and moment one particle received from the fluid in one step (lattice units).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ParticleForce {
+    /// Σ over its nodes of `-ρ Δu` (momentum per step).
+    pub force: [f64; 3],
+    /// Σ over its nodes of `x × (-ρ Δu)`, about the lattice origin; the torque about a centre
+    /// `x_c` is `moment - x_c × force`.
+    pub moment: [f64; 3],
+}
+
+/// What one step reports.
+#[derive(Clone, Debug, Default)]
+pub struct StepReport {
+    /// Largest `|u|` of any fluid node (lattice units).
+    pub max_velocity: f64,
+    /// Hydrodynamic force per particle id, in id order.
+    pub particle_forces: BTreeMap<u32, ParticleForce>,
+}
+
+/// Density and velocity fields written during a sweep when asked for.
+#[derive(Clone, Debug, Default)]
+pub struct Macroscopic {
+    /// Density per cell.
+    pub rho: Vec<f64>,
+    /// Velocity per cell (`u + Δu/2`, the physical velocity of the forcing scheme).
+    pub u: Vec<[f64; 3]>,
+}
+
+#[derive(Clone, Copy)]
+struct Ptr(*mut f64);
+unsafe impl Send for Ptr {}
+unsafe impl Sync for Ptr {}
+
+#[derive(Clone, Copy)]
+struct MacroPtr(*mut f64, *mut [f64; 3]);
+unsafe impl Send for MacroPtr {}
+unsafe impl Sync for MacroPtr {}
+
+/// A D3Q19 BGK lattice with HLBM particle forcing.
+pub struct Lattice {
+    nx: usize,
+    ny: usize,
+    nz: usize,
+    f: Vec<f64>,
+    omega: f64,
+    kind: Vec<NodeKind>,
+    wall_velocity: Vec<[f64; 3]>,
+    slow_row: Vec<bool>,
+    body_acceleration: [f64; 3],
+    time: u64,
+    /// Particle nodes; filled by the coupling before each step.
+    pub particles: ParticleField,
+    velocity_limit: f64,
+    macros: Option<Macroscopic>,
+}
+
+/// Per-slab results, reduced in slab order (deterministic for any thread count).
+#[derive(Default)]
+struct SlabResult {
+    max_u2: f64,
+    bad: Option<(usize, f64)>,
+    forces: BTreeMap<u32, ParticleForce>,
+}
+
+impl Lattice {
+    /// A periodic `nx × ny × nz` lattice at rest with density 1 and relaxation time `tau > 0.5`.
+    pub fn new(nx: usize, ny: usize, nz: usize, tau: f64) -> Result<Self> {
+        if !(tau > 0.5 && tau.is_finite()) {
+            return Err(Error::InvalidParameter { name: "tau", value: tau, allowed: "tau > 0.5 (finite)" });
+        }
+        for (name, v) in [("nx", nx), ("ny", ny), ("nz", nz)] {
+            if v == 0 || v > 1 << 20 {
+                return Err(Error::InvalidParameter { name, value: v as f64, allowed: "1 <= n <= 2^20" });
+            }
+        }
+        let n = nx * ny * nz;
+        let mut f = vec![0.0; Q * n];
+        for i in 0..Q {
+            f[i * n..(i + 1) * n].fill(W[i]);
+        }
+        Ok(Self {
+            nx,
+            ny,
+            nz,
+            f,
+            omega: 1.0 / tau,
+            kind: vec![0; n],
+            // Kind 0: fluid; kind 1: the resting wall.
+            wall_velocity: vec![[0.0; 3], [0.0; 3]],
+            slow_row: vec![false; ny * nz],
+            body_acceleration: [0.0; 3],
+            time: 0,
+            particles: ParticleField::new(nx, ny, nz),
+            velocity_limit: 0.5,
+            macros: None,
+        })
+    }
+
+    /// Lattice size.
+    pub fn dims(&self) -> [usize; 3] {
+        [self.nx, self.ny, self.nz]
+    }
+
+    /// Number of cells.
+    pub fn cells(&self) -> usize {
+        self.nx * self.ny * self.nz
+    }
+
+    /// Steps done.
+    pub fn time(&self) -> u64 {
+        self.time
+    }
+
+    /// Relaxation time.
+    pub fn tau(&self) -> f64 {
+        1.0 / self.omega
+    }
+
+    /// Index of cell `(x, y, z)`.
+    #[inline]
+    pub fn index(&self, x: usize, y: usize, z: usize) -> usize {
+        (z * self.ny + y) * self.nx + x
+    }
+
+    /// A body acceleration (lattice units) on every fluid node: gravity, a pressure gradient or
+    /// a balance force.
+    pub fn set_body_acceleration(&mut self, a: [f64; 3]) {
+        self.body_acceleration = a;
+    }
+
+    /// The largest `|u|` (lattice units) a step accepts before reporting [`Error::Unstable`].
+    pub fn set_velocity_limit(&mut self, limit: f64) {
+        self.velocity_limit = limit;
+    }
+
+    /// Registers a wall moving with `velocity` (lattice units); returns its kind for
+    /// [`Lattice::set_solid`].
+    pub fn add_wall(&mut self, velocity: [f64; 3]) -> Result<NodeKind> {
+        if self.wall_velocity.len() > 254 {
+            return Err(Error::InvalidParameter { name: "walls", value: 255.0, allowed: "at most 254 walls" });
+        }
+        self.wall_velocity.push(velocity);
+        Ok((self.wall_velocity.len() - 1) as NodeKind)
+    }
+
+    /// Marks cell `(x, y, z)` fluid (`0`), resting wall (`1`) or a wall `kind` returned by
+    /// [`Lattice::add_wall`].
+    pub fn set_solid(&mut self, x: usize, y: usize, z: usize, kind: NodeKind) {
+        if kind as usize >= self.wall_velocity.len() {
+            self.wall_velocity.resize(kind as usize + 1, [0.0; 3]);
+        }
+        let c = self.index(x, y, z);
+        self.kind[c] = kind;
+        // Rows next to a solid node take the solid-aware path.
+        let (ny, nz) = (self.ny as i64, self.nz as i64);
+        for dz in -1..=1i64 {
+            for dy in -1..=1i64 {
+                let (yy, zz) = ((y as i64 + dy).rem_euclid(ny), (z as i64 + dz).rem_euclid(nz));
+                self.slow_row[(zz * ny + yy) as usize] = true;
+            }
+        }
+    }
+
+    /// Closes the domain with resting walls on the faces of the non-periodic axes.
+    pub fn close_faces(&mut self, periodic: [bool; 3]) {
+        let [nx, ny, nz] = self.dims();
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    let edge = (!periodic[0] && (x == 0 || x == nx - 1))
+                        || (!periodic[1] && (y == 0 || y == ny - 1))
+                        || (!periodic[2] && (z == 0 || z == nz - 1));
+                    if edge {
+                        self.set_solid(x, y, z, 1);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Checks that a fluid node never reaches across a non-periodic face: the faces of those
+    /// axes must be solid.
+    pub fn check_closed(&self, periodic: [bool; 3]) -> Result<()> {
+        let [nx, ny, nz] = self.dims();
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    let edge = [(x, nx), (y, ny), (z, nz)].iter().zip(periodic).any(|(&(v, n), p)| !p && (v == 0 || v == n - 1));
+                    if edge && self.kind[self.index(x, y, z)] == 0 {
+                        return Err(Error::OpenBoundary { x, y, z });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether cell `c` is solid.
+    pub fn is_solid(&self, c: usize) -> bool {
+        self.kind[c] != 0
+    }
+
+    /// Sets every fluid node to the equilibrium of `(rho, u)` given per cell.
+    pub fn initialise(&mut self, mut field: impl FnMut(usize, usize, usize) -> (f64, [f64; 3])) {
+        let n = self.cells();
+        // Equilibrium is stored in natural order; the next step must then be an even one.
+        if self.time % 2 == 1 {
+            self.time += 1;
+        }
+        for z in 0..self.nz {
+            for y in 0..self.ny {
+                for x in 0..self.nx {
+                    let c = self.index(x, y, z);
+                    let (rho, u) = field(x, y, z);
+                    for i in 0..Q {
+                        self.f[i * n + c] = equilibrium(i, rho, u);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Asks the next sweeps to store density and velocity (read them with [`Lattice::macroscopic`]).
+    pub fn store_macroscopic(&mut self, on: bool) {
+        self.macros = on.then(|| Macroscopic { rho: vec![1.0; self.cells()], u: vec![[0.0; 3]; self.cells()] });
+    }
+
+    /// Density and velocity of the last sweep, if stored.
+    pub fn macroscopic(&self) -> Option<&Macroscopic> {
+        self.macros.as_ref()
+    }
+
+    /// The 19 populations of cell `c` as they enter the next collision.
+    pub fn populations(&self, x: usize, y: usize, z: usize) -> [f64; Q] {
+        let n = self.cells();
+        let c = self.index(x, y, z);
+        let mut out = [0.0; Q];
+        if self.time % 2 == 0 {
+            for i in 0..Q {
+                out[i] = self.f[i * n + c];
+            }
+        } else {
+            for i in 0..Q {
+                let src = self.neighbour(x, y, z, C[i], -1);
+                out[i] = if self.kind[src] != 0 {
+                    self.f[i * n + c] + 6.0 * W[i] * dot(C[i], self.wall_velocity[self.kind[src] as usize])
+                } else {
+                    self.f[OPP[i] * n + src]
+                };
+            }
+        }
+        out
+    }
+
+    /// Density and velocity `Σ f c / ρ` of cell `(x, y, z)` (before forcing).
+    pub fn density_velocity(&self, x: usize, y: usize, z: usize) -> (f64, [f64; 3]) {
+        let f = self.populations(x, y, z);
+        let rho: f64 = f.iter().sum();
+        let mut j = [0.0; 3];
+        for i in 0..Q {
+            for d in 0..3 {
+                j[d] += f[i] * C[i][d] as f64;
+            }
+        }
+        (rho, [j[0] / rho, j[1] / rho, j[2] / rho])
+    }
+
+    /// Total mass and momentum of the fluid nodes.
+    pub fn totals(&self) -> (f64, [f64; 3]) {
+        let (mut m, mut p) = (0.0, [0.0; 3]);
+        for z in 0..self.nz {
+            for y in 0..self.ny {
+                for x in 0..self.nx {
+                    if self.kind[self.index(x, y, z)] == 0 {
+                        let (rho, u) = self.density_velocity(x, y, z);
+                        m += rho;
+                        for d in 0..3 {
+                            p[d] += rho * u[d];
+                        }
+                    }
+                }
+            }
+        }
+        (m, p)
+    }
+
+    #[inline]
+    fn neighbour(&self, x: usize, y: usize, z: usize, c: [i32; 3], sign: i64) -> usize {
+        let w = |v: usize, d: i32, n: usize| (v as i64 + sign * d as i64).rem_euclid(n as i64) as usize;
+        self.index(w(x, c[0], self.nx), w(y, c[1], self.ny), w(z, c[2], self.nz))
+    }
+
+    /// One fused stream–collide step over all fluid nodes, on the current rayon pool.
+    ///
+    /// Fails with [`Error::Unstable`] (naming the step and the node) when a velocity is NaN or
+    /// exceeds the limit; the lattice is then left as it was after the failed sweep.
+    pub fn step(&mut self) -> Result<StepReport> {
+        let odd = self.time % 2 == 1;
+        let [nx, ny, nz] = self.dims();
+        let n = self.cells();
+        let ptr = Ptr(self.f.as_mut_ptr());
+        let macros = self.macros.as_mut().map(|m| MacroPtr(m.rho.as_mut_ptr(), m.u.as_mut_ptr()));
+        let this = &*self;
+        let slabs: Vec<SlabResult> = (0..nz)
+            .into_par_iter()
+            .map(|z| {
+                let mut res = SlabResult::default();
+                for y in 0..ny {
+                    // SAFETY: in the A-A pattern every cell reads and writes only its own 19
+                    // locations, so slabs never touch the same memory.
+                    unsafe { this.sweep_row(ptr, macros, odd, y, z, &mut res) };
+                }
+                res
+            })
+            .collect();
+        let mut report = StepReport::default();
+        let mut max_u2 = 0.0f64;
+        for s in slabs {
+            if let Some((cell, u)) = s.bad {
+                let (x, y, z) = (cell % nx, (cell / nx) % ny, cell / (nx * ny));
+                let step = self.time;
+                self.time += 1;
+                return Err(Error::Unstable { step, x, y, z, velocity: u });
+            }
+            max_u2 = max_u2.max(s.max_u2);
+            for (id, pf) in s.forces {
+                let e = report.particle_forces.entry(id).or_default();
+                for d in 0..3 {
+                    e.force[d] += pf.force[d];
+                    e.moment[d] += pf.moment[d];
+                }
+            }
+        }
+        let _ = n;
+        report.max_velocity = max_u2.sqrt();
+        self.time += 1;
+        Ok(report)
+    }
+
+    /// Runs `steps` steps; stops at the first error.
+    pub fn run(&mut self, steps: usize) -> Result<StepReport> {
+        let mut last = StepReport::default();
+        for _ in 0..steps {
+            last = self.step()?;
+        }
+        Ok(last)
+    }
+
+    /// Sweeps one row.
+    ///
+    /// # Safety
+    /// `ptr` points at `self.f`; no other thread works on this row's cells.
+    unsafe fn sweep_row(&self, ptr: Ptr, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+        let (nx, ny, nz) = (self.nx, self.ny, self.nz);
+        let n = nx * ny * nz;
+        let row = z * ny + y;
+        let base = row * nx;
+        let slow = self.slow_row[row];
+        let prow = self.particles.row(row);
+        let g = self.body_acceleration;
+        let forced = !prow.is_empty() || g != [0.0; 3];
+        // Per-direction row offsets: where odd steps read (x - c_i) and write (x + c_i).
+        let mut src_row = [0usize; Q];
+        let mut dst_row = [0usize; Q];
+        for i in 0..Q {
+            let w = |v: usize, d: i32, m: usize| (v as i64 + d as i64).rem_euclid(m as i64) as usize;
+            src_row[i] = (w(z, -C[i][2], nz) * ny + w(y, -C[i][1], ny)) * nx;
+            dst_row[i] = (w(z, C[i][2], nz) * ny + w(y, C[i][1], ny)) * nx;
+        }
+        let wrap = |x: i64| x.rem_euclid(nx as i64) as usize;
+        let f = ptr.0;
+        let mut pnext = 0usize;
+        let mut x0 = 0;
+        while x0 < nx {
+            let lanes = LANES.min(nx - x0);
+            let interior = !slow && x0 >= 1 && x0 + LANES < nx;
+            let mut live = [true; LANES];
+            for l in lanes..LANES {
+                live[l] = false;
+            }
+            if slow {
+                for l in 0..lanes {
+                    live[l] = self.kind[base + x0 + l] == 0;
+                }
+            }
+            // Gather.
+            let mut blk = [[1.0 / 19.0; LANES]; Q];
+            for i in 0..Q {
+                if !odd {
+                    if lanes == LANES {
+                        let s = f.add(i * n + base + x0);
+                        for l in 0..LANES {
+                            blk[i][l] = *s.add(l);
+                        }
+                    } else {
+                        for l in 0..lanes {
+                            blk[i][l] = *f.add(i * n + base + x0 + l);
+                        }
+                    }
+                } else if interior {
+                    let s = f.add(OPP[i] * n + src_row[i] + (x0 as i64 - C[i][0] as i64) as usize);
+                    for l in 0..LANES {
+                        blk[i][l] = *s.add(l);
+                    }
+                } else {
+                    for l in 0..lanes {
+                        if !live[l] {
+                            continue;
+                        }
+                        let x = x0 + l;
+                        let sx = wrap(x as i64 - C[i][0] as i64);
+                        let src = src_row[i] + sx;
+                        let k = if slow { self.kind[src] } else { 0 };
+                        blk[i][l] = if k != 0 {
+                            *f.add(i * n + base + x) + 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize])
+                        } else {
+                            *f.add(OPP[i] * n + src)
+                        };
+                    }
+                }
+            }
+            // Forcing: body acceleration plus the particle term d_B (v_p - u).
+            let mut du = [[0.0; LANES]; 3];
+            let mut dbv = [[0.0f64; LANES]; 4];
+            let mut pid = [u32::MAX; LANES];
+            if forced {
+                for d in 0..3 {
+                    du[d] = [g[d]; LANES];
+                }
+                while pnext < prow.len() && (prow[pnext].x as usize) < x0 + lanes {
+                    let p = &prow[pnext];
+                    let l = p.x as usize - x0;
+                    dbv[0][l] = p.d_b;
+                    for d in 0..3 {
+                        dbv[d + 1][l] = p.velocity[d];
+                    }
+                    pid[l] = p.id;
+                    pnext += 1;
+                }
+                if pid.iter().any(|&p| p != u32::MAX) {
+                    let (_, u) = crate::d3q19::moments(&blk);
+                    for l in 0..LANES {
+                        if pid[l] != u32::MAX {
+                            for d in 0..3 {
+                                du[d][l] += dbv[0][l] * (dbv[d + 1][l] - u[d][l]);
+                            }
+                        }
+                    }
+                }
+            }
+            let (rho, u) = collide(&mut blk, self.omega, forced.then_some(&du));
+            // Health and particle momentum exchange.
+            for l in 0..lanes {
+                if !live[l] {
+                    continue;
+                }
+                let u2 = u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l];
+                if !(u2 <= self.velocity_limit * self.velocity_limit) && res.bad.is_none() {
+                    res.bad = Some((base + x0 + l, u2.sqrt()));
+                }
+                res.max_u2 = res.max_u2.max(u2);
+                if pid[l] != u32::MAX {
+                    let fp = [0, 1, 2].map(|d| -rho[l] * (du[d][l] - g[d]));
+                    let pos = [(x0 + l) as f64, y as f64, z as f64];
+                    let e = res.forces.entry(pid[l]).or_default();
+                    let m = cross(pos, fp);
+                    for d in 0..3 {
+                        e.force[d] += fp[d];
+                        e.moment[d] += m[d];
+                    }
+                }
+            }
+            if let Some(MacroPtr(r, uu)) = macros {
+                for l in 0..lanes {
+                    *r.add(base + x0 + l) = rho[l];
+                    *uu.add(base + x0 + l) = [u[0][l], u[1][l], u[2][l]];
+                }
+            }
+            // Scatter.
+            for i in 0..Q {
+                if !odd {
+                    let dst = f.add(OPP[i] * n + base + x0);
+                    for l in 0..lanes {
+                        if live[l] {
+                            *dst.add(l) = blk[i][l];
+                        }
+                    }
+                } else if interior {
+                    let d = f.add(i * n + dst_row[i] + (x0 as i64 + C[i][0] as i64) as usize);
+                    for l in 0..LANES {
+                        *d.add(l) = blk[i][l];
+                    }
+                } else {
+                    for l in 0..lanes {
+                        if !live[l] {
+                            continue;
+                        }
+                        let x = x0 + l;
+                        let dst = dst_row[i] + wrap(x as i64 + C[i][0] as i64);
+                        let k = if slow { self.kind[dst] } else { 0 };
+                        if k != 0 {
+                            *f.add(OPP[i] * n + base + x) = blk[i][l] - 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]);
+                        } else {
+                            *f.add(i * n + dst) = blk[i][l];
+                        }
+                    }
+                }
+            }
+            x0 += LANES;
+        }
+    }
+}
+
+#[inline]
+fn dot(c: [i32; 3], v: [f64; 3]) -> f64 {
+    c[0] as f64 * v[0] + c[1] as f64 * v[1] + c[2] as f64 * v[2]
+}
+
+#[inline]
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}

@@ -1,0 +1,183 @@
+//! Validation of the lattice: analytical flows, conservation, determinism, health checks.
+
+use hlbm::{Error, Lattice, UnitConverter};
+
+/// Force-driven channel between halfway bounce-back walls at z = 0.5 and z = h + 0.5.
+fn poiseuille_l2(h: usize) -> f64 {
+    let tau = 0.8;
+    let nu = (tau - 0.5) / 3.0;
+    let g = 1e-6;
+    let mut lat = Lattice::new(4, 1, h + 2, tau).unwrap();
+    lat.close_faces([true, true, false]);
+    lat.check_closed([true, true, false]).unwrap();
+    lat.set_body_acceleration([g, 0.0, 0.0]);
+    lat.store_macroscopic(true);
+    let steps = (12.0 * (h * h) as f64 / nu) as usize;
+    lat.run(steps).unwrap();
+    let m = lat.macroscopic().unwrap();
+    let (mut num, mut den) = (0.0, 0.0);
+    for z in 1..=h {
+        let zf = z as f64;
+        let exact = g / (2.0 * nu) * (zf - 0.5) * (h as f64 + 0.5 - zf);
+        let u = m.u[lat.index(1, 0, z)][0];
+        num += (u - exact).powi(2);
+        den += exact * exact;
+    }
+    (num / den).sqrt()
+}
+
+#[test]
+fn poiseuille_converges_at_second_order() {
+    let e: Vec<f64> = [8, 16, 32].iter().map(|&h| poiseuille_l2(h)).collect();
+    let order = (e[0] / e[2]).log2() / 2.0;
+    assert!(e[2] < 2e-3, "L2 error at h = 32: {:e}", e[2]);
+    assert!(order > 1.8, "order {order:.2} from errors {e:?}");
+}
+
+#[test]
+fn taylor_green_decays_at_the_viscous_rate() {
+    let n = 32;
+    let tau = 0.8;
+    let nu = (tau - 0.5) / 3.0;
+    let u0 = 0.01;
+    let k = 2.0 * std::f64::consts::PI / n as f64;
+    let mut lat = Lattice::new(n, n, 1, tau).unwrap();
+    lat.initialise(|x, y, _| {
+        let (x, y) = (x as f64, y as f64);
+        let rho = 1.0 - 3.0 * u0 * u0 / 4.0 * ((2.0 * k * x).cos() + (2.0 * k * y).cos());
+        (rho, [-u0 * (k * x).cos() * (k * y).sin(), u0 * (k * x).sin() * (k * y).cos(), 0.0])
+    });
+    let energy = |lat: &Lattice| {
+        let mut e = 0.0;
+        for y in 0..n {
+            for x in 0..n {
+                let (_, u) = lat.density_velocity(x, y, 0);
+                e += u[0] * u[0] + u[1] * u[1];
+            }
+        }
+        e
+    };
+    lat.run(100).unwrap();
+    let e0 = energy(&lat);
+    lat.run(1000).unwrap();
+    let e1 = energy(&lat);
+    let rate = (e0 / e1).ln() / 1000.0 / 4.0;
+    let exact = nu * k * k;
+    assert!((rate / exact - 1.0).abs() < 0.01, "decay rate {rate:e} vs {exact:e}");
+}
+
+fn moving_sphere(lat: &mut Lattice, v: [f64; 3]) {
+    lat.particles.clear();
+    let [nx, ny, nz] = lat.dims();
+    let c = [nx as f64 / 2.0 - 0.3, ny as f64 / 2.0 + 0.2, nz as f64 / 2.0];
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let d = ((x as f64 - c[0]).powi(2) + (y as f64 - c[1]).powi(2) + (z as f64 - c[2]).powi(2)).sqrt() - 4.0;
+                let db = hlbm::solid_fraction(d, 1.0);
+                if db > 0.0 {
+                    lat.particles.add(x, y, z, db, v, 7);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn momentum_is_conserved_to_round_off_in_a_periodic_box() {
+    let mut lat = Lattice::new(16, 16, 16, 0.7).unwrap();
+    let v = [0.02, -0.01, 0.005];
+    moving_sphere(&mut lat, v);
+    let (m0, mut p) = lat.totals();
+    let mut transferred = [0.0f64; 3];
+    for _ in 0..30 {
+        let r = lat.step().unwrap();
+        let f = r.particle_forces[&7].force;
+        let (m, p1) = lat.totals();
+        for d in 0..3 {
+            // Fluid gained exactly what the particle lost.
+            assert!((p1[d] - p[d] + f[d]).abs() < 1e-12, "axis {d}: {} vs {}", p1[d] - p[d], -f[d]);
+            transferred[d] -= f[d];
+        }
+        assert!((m - m0).abs() < 1e-10 * m0);
+        p = p1;
+    }
+    // The particle dragged the fluid along its velocity.
+    assert!(transferred[0] > 0.0 && transferred[1] < 0.0 && transferred[2] > 0.0);
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let mut lat = Lattice::new(13, 12, 11, 0.6).unwrap();
+            lat.close_faces([true, false, true]);
+            lat.set_body_acceleration([1e-5, 0.0, 2e-6]);
+            moving_sphere(&mut lat, [0.01, 0.0, -0.01]);
+            let mut forces = Vec::new();
+            for _ in 0..25 {
+                forces.push(lat.step().unwrap().particle_forces[&7]);
+            }
+            let mut f = Vec::new();
+            for z in 0..11 {
+                for y in 0..12 {
+                    for x in 0..13 {
+                        f.extend(lat.populations(x, y, z));
+                    }
+                }
+            }
+            (f, forces)
+        })
+    };
+    let (f1, p1) = run(1);
+    let (f2, p2) = run(2);
+    assert!(f1.iter().zip(&f2).all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert_eq!(p1, p2);
+}
+
+#[test]
+fn moving_wall_drives_couette_flow() {
+    let h = 16;
+    let mut lat = Lattice::new(4, 1, h + 2, 0.9).unwrap();
+    let lid = lat.add_wall([0.01, 0.0, 0.0]).unwrap();
+    lat.close_faces([true, true, false]);
+    for x in 0..4 {
+        lat.set_solid(x, 0, h + 1, lid);
+    }
+    lat.run(20000).unwrap();
+    for z in 1..=h {
+        let (_, u) = lat.density_velocity(1, 0, z);
+        let exact = 0.01 * (z as f64 - 0.5) / h as f64;
+        assert!((u[0] - exact).abs() < 1e-6, "z = {z}: {} vs {exact}", u[0]);
+    }
+}
+
+#[test]
+fn blow_up_is_reported_with_step_and_node() {
+    let mut lat = Lattice::new(8, 8, 8, 0.51).unwrap();
+    lat.set_body_acceleration([0.05, 0.0, 0.0]);
+    match lat.run(100) {
+        Err(Error::Unstable { step, x, y, z, velocity }) => {
+            assert!(step > 0 && x < 8 && y < 8 && z < 8);
+            assert!(!(velocity <= 0.5));
+        }
+        other => panic!("expected Unstable, got {other:?}"),
+    }
+    let mut open = Lattice::new(4, 4, 4, 0.6).unwrap();
+    assert!(matches!(open.check_closed([true, true, false]), Err(Error::OpenBoundary { .. })));
+    open.close_faces([true, true, false]);
+    assert!(open.check_closed([true, true, false]).is_ok());
+}
+
+#[test]
+fn units_refuse_bad_input_and_round_trip() {
+    assert!(matches!(UnitConverter::new(1e-3, 1e-9, 1e-6, 1000.0).map(|u| u.tau()), Ok(t) if t > 0.5));
+    assert!(matches!(UnitConverter::from_tau(1e-3, 0.5, 1e-6, 1000.0), Err(Error::InvalidParameter { name: "tau", .. })));
+    assert!(matches!(UnitConverter::new(-1.0, 1e-3, 1e-6, 1.0), Err(Error::InvalidParameter { name: "dx", .. })));
+    assert!(matches!(Lattice::new(4, 4, 4, 0.4), Err(Error::InvalidParameter { name: "tau", .. })));
+    let u = UnitConverter::from_tau(3e-4, 0.55, 2.468e-5, 1000.0).unwrap();
+    assert!((u.velocity_to_physical(u.velocity_to_lattice(0.37)) - 0.37).abs() < 1e-15);
+    assert!(u.mach_warning(0.001).is_none());
+    assert!(u.mach_warning(100.0).is_some());
+}
