@@ -1,0 +1,132 @@
+//! Memory bandwidth of this machine (STREAM-like copy and triad in this binary), the roofline
+//! of a D3Q19 f64 update (304 B per node), and the kernel's MLUPs on 64³ and 128³ periodic boxes
+//! with 1 and 2 threads, plain fluid and with 20 % of the nodes covered by particles.
+//!
+//! Writes `target/validation/lbm_throughput.csv`.
+
+use std::io::Write;
+use std::time::Instant;
+
+use hlbm::Lattice;
+use rayon::prelude::*;
+
+/// Bytes a D3Q19 f64 node update moves in the A-A pattern: 19 reads + 19 writes.
+const BYTES_PER_UPDATE: f64 = 19.0 * 2.0 * 8.0;
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool")
+}
+
+/// Best-of-5 bandwidth (GB/s) of `a = b` (16 B/element) and `a = b + s c` (24 B/element).
+fn bandwidth(threads: usize) -> (f64, f64) {
+    let n = 1 << 25; // 3 × 256 MiB, far beyond any cache
+    let (mut a, b, c) = (vec![0.0f64; n], vec![1.0f64; n], vec![2.0f64; n]);
+    let chunk = n / 64;
+    pool(threads).install(|| {
+        let mut best = (0.0f64, 0.0f64);
+        for _ in 0..5 {
+            let t = Instant::now();
+            a.par_chunks_mut(chunk).zip(b.par_chunks(chunk)).for_each(|(a, b)| a.copy_from_slice(b));
+            let copy = 16.0 * n as f64 / t.elapsed().as_secs_f64() / 1e9;
+            let t = Instant::now();
+            a.par_chunks_mut(chunk).zip(b.par_chunks(chunk).zip(c.par_chunks(chunk))).for_each(|(a, (b, c))| {
+                for i in 0..a.len() {
+                    a[i] = b[i] + 3.0 * c[i];
+                }
+            });
+            let triad = 24.0 * n as f64 / t.elapsed().as_secs_f64() / 1e9;
+            best = (best.0.max(copy), best.1.max(triad));
+        }
+        std::hint::black_box(&a);
+        best
+    })
+}
+
+/// Covers about `fraction` of the nodes with spheres of radius 4 moving slowly.
+fn add_particles(lat: &mut Lattice, fraction: f64) -> usize {
+    let [nx, ny, nz] = lat.dims();
+    let r = 4.0;
+    // d_B > 0 reaches half a cell beyond the surface.
+    let sphere = 4.0 / 3.0 * std::f64::consts::PI * (r + 0.5f64).powi(3);
+    let spacing = (sphere / fraction).cbrt();
+    let mut id = 0;
+    let mut z = spacing / 2.0;
+    while z < nz as f64 {
+        let mut y = spacing / 2.0;
+        while y < ny as f64 {
+            let mut x = spacing / 2.0;
+            while x < nx as f64 {
+                for dz in -5i64..=5 {
+                    for dy in -5i64..=5 {
+                        for dx in -5i64..=5 {
+                            let p = [x.floor() as i64 + dx, y.floor() as i64 + dy, z.floor() as i64 + dz];
+                            let d = ((p[0] as f64 - x).powi(2) + (p[1] as f64 - y).powi(2) + (p[2] as f64 - z).powi(2)).sqrt() - r;
+                            let db = hlbm::solid_fraction(d, 1.0);
+                            let w = |v: i64, n: usize| v.rem_euclid(n as i64) as usize;
+                            if db > 0.0 {
+                                lat.particles.add(w(p[0], nx), w(p[1], ny), w(p[2], nz), db, [1e-3, 0.0, 0.0], id);
+                            }
+                        }
+                    }
+                }
+                id += 1;
+                x += spacing;
+            }
+            y += spacing;
+        }
+        z += spacing;
+    }
+    lat.particles.len()
+}
+
+/// MLUPs of `n³` with `threads` threads, timed over at least 1.5 s.
+fn mlups(n: usize, threads: usize, particles: bool) -> (f64, f64) {
+    pool(threads).install(|| {
+        let mut lat = Lattice::new(n, n, n, 0.6).expect("lattice");
+        let covered = if particles { add_particles(&mut lat, 0.2) as f64 / lat.cells() as f64 } else { 0.0 };
+        lat.run(4).expect("warm-up");
+        let t = Instant::now();
+        let mut steps = 0;
+        while steps < 4 || t.elapsed().as_secs_f64() < 1.5 {
+            lat.run(2).expect("stable");
+            steps += 2;
+        }
+        (lat.cells() as f64 * steps as f64 / t.elapsed().as_secs_f64() / 1e6, covered)
+    })
+}
+
+fn main() {
+    let threads_max = std::thread::available_parallelism().map_or(1, |n| n.get()).min(2);
+    println!("Memory bandwidth (best of 5, 3 × 256 MiB arrays):");
+    let mut roof = 0.0f64;
+    for t in 1..=threads_max {
+        let (copy, triad) = bandwidth(t);
+        println!("  {t} thread(s): copy {copy:.1} GB/s, triad {triad:.1} GB/s");
+        roof = roof.max(triad);
+    }
+    let roofline = roof * 1e9 / BYTES_PER_UPDATE / 1e6;
+    println!("Roofline: {roof:.1} GB/s / {BYTES_PER_UPDATE} B per node update = {roofline:.1} MLUPs\n");
+    println!("{:>6} {:>8} {:>10} {:>9} {:>8} {:>10}", "grid", "threads", "particles", "covered", "MLUPs", "% roofline");
+    let mut rows = Vec::new();
+    for n in [64, 128] {
+        for t in 1..=threads_max {
+            for particles in [false, true] {
+                let (m, covered) = mlups(n, t, particles);
+                println!("{:>5}³ {t:>8} {:>10} {:>8.1}% {m:>8.1} {:>9.0}%", n, particles, covered * 100.0, 100.0 * m / roofline);
+                rows.push(format!("{n}^3,{t},{},{m:.2},{roofline:.2}", if particles { 0.2 } else { 0.0 }));
+            }
+        }
+    }
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("target").join("validation");
+    std::fs::create_dir_all(&dir).expect("output folder");
+    let path = dir.join("lbm_throughput.csv");
+    let tmp = dir.join("lbm_throughput.csv.tmp");
+    let mut f = std::fs::File::create(&tmp).expect("csv");
+    writeln!(f, "grid,threads,particles,mlups,roofline_mlups").unwrap();
+    for r in rows {
+        writeln!(f, "{r}").unwrap();
+    }
+    f.sync_all().unwrap();
+    std::fs::rename(&tmp, &path).expect("csv");
+    println!("\nwrote {}", path.display());
+}
