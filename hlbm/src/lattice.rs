@@ -398,13 +398,21 @@ impl Lattice {
             src_row[i] = (w(z, -C[i][2], nz) * ny + w(y, -C[i][1], ny)) * nx;
             dst_row[i] = (w(z, C[i][2], nz) * ny + w(y, C[i][1], ny)) * nx;
         }
-        let wrap = |x: i64| x.rem_euclid(nx as i64) as usize;
+        // |offset| <= 1, so one compare wraps (no integer division).
+        let wrap = |x: i64| {
+            if x < 0 {
+                (x + nx as i64) as usize
+            } else if x >= nx as i64 {
+                (x - nx as i64) as usize
+            } else {
+                x as usize
+            }
+        };
         let f = ptr.0;
         let mut pnext = 0usize;
         let mut x0 = 0;
         while x0 < nx {
             let lanes = LANES.min(nx - x0);
-            let interior = !slow && x0 >= 1 && x0 + LANES < nx;
             let mut live = [true; LANES];
             for l in lanes..LANES {
                 live[l] = false;
@@ -414,6 +422,9 @@ impl Lattice {
                     live[l] = self.kind[base + x0 + l] == 0;
                 }
             }
+            let full = lanes == LANES && !slow;
+            // A full block away from the row's ends: every lane's neighbour stays in the row.
+            let interior = full && x0 >= 1 && x0 + LANES < nx;
             // Gather.
             let mut blk = [[1.0 / 19.0; LANES]; Q];
             for i in 0..Q {
@@ -432,6 +443,21 @@ impl Lattice {
                     let s = f.add(OPP[i] * n + src_row[i] + (x0 as i64 - C[i][0] as i64) as usize);
                     for l in 0..LANES {
                         blk[i][l] = *s.add(l);
+                    }
+                } else if !slow {
+                    // Lanes whose source stays in the row load contiguously; at most one wraps.
+                    let cx = C[i][0] as i64;
+                    let row_ptr = f.add(OPP[i] * n + src_row[i]);
+                    let (lo, hi) = lane_range(x0, lanes, nx, -cx);
+                    let s = row_ptr.offset(x0 as isize - cx as isize);
+                    for l in lo..hi {
+                        blk[i][l] = *s.add(l);
+                    }
+                    if lo == 1 {
+                        blk[i][0] = *row_ptr.add(nx - 1);
+                    }
+                    if hi < lanes {
+                        blk[i][lanes - 1] = *row_ptr;
                     }
                 } else {
                     for l in 0..lanes {
@@ -480,24 +506,33 @@ impl Lattice {
                 }
             }
             let (rho, u) = collide(&mut blk, self.omega, forced.then_some(&du));
-            // Health and particle momentum exchange.
-            for l in 0..lanes {
-                if !live[l] {
-                    continue;
-                }
-                let u2 = u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l];
-                if !(u2 <= self.velocity_limit * self.velocity_limit) && res.bad.is_none() {
-                    res.bad = Some((base + x0 + l, u2.sqrt()));
-                }
-                res.max_u2 = res.max_u2.max(u2);
-                if pid[l] != u32::MAX {
-                    let fp = [0, 1, 2].map(|d| -rho[l] * (du[d][l] - g[d]));
-                    let pos = [(x0 + l) as f64, y as f64, z as f64];
-                    let e = res.forces.entry(pid[l]).or_default();
-                    let m = cross(pos, fp);
-                    for d in 0..3 {
-                        e.force[d] += fp[d];
-                        e.moment[d] += m[d];
+            // Health: branch-free over the block; the slow search only when something is off.
+            let lim2 = self.velocity_limit * self.velocity_limit;
+            let mut u2 = [0.0; LANES];
+            let mut blk_max = 0.0f64;
+            let mut bad = false;
+            for l in 0..LANES {
+                u2[l] = if live[l] { u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l] } else { 0.0 };
+                bad |= !(u2[l] <= lim2);
+                blk_max = blk_max.max(u2[l]);
+            }
+            res.max_u2 = res.max_u2.max(blk_max);
+            if bad && res.bad.is_none() {
+                let l = (0..LANES).find(|&l| !(u2[l] <= lim2)).unwrap_or(0);
+                res.bad = Some((base + x0 + l, u2[l].sqrt()));
+            }
+            // Momentum exchange with the particles.
+            if forced {
+                for l in 0..lanes {
+                    if pid[l] != u32::MAX {
+                        let fp = [0, 1, 2].map(|d| -rho[l] * (du[d][l] - g[d]));
+                        let pos = [(x0 + l) as f64, y as f64, z as f64];
+                        let e = res.forces.entry(pid[l]).or_default();
+                        let m = cross(pos, fp);
+                        for d in 0..3 {
+                            e.force[d] += fp[d];
+                            e.moment[d] += m[d];
+                        }
                     }
                 }
             }
@@ -511,15 +546,35 @@ impl Lattice {
             for i in 0..Q {
                 if !odd {
                     let dst = f.add(OPP[i] * n + base + x0);
-                    for l in 0..lanes {
-                        if live[l] {
+                    if full {
+                        for l in 0..LANES {
                             *dst.add(l) = blk[i][l];
+                        }
+                    } else {
+                        for l in 0..lanes {
+                            if live[l] {
+                                *dst.add(l) = blk[i][l];
+                            }
                         }
                     }
                 } else if interior {
                     let d = f.add(i * n + dst_row[i] + (x0 as i64 + C[i][0] as i64) as usize);
                     for l in 0..LANES {
                         *d.add(l) = blk[i][l];
+                    }
+                } else if !slow {
+                    let cx = C[i][0] as i64;
+                    let row_ptr = f.add(i * n + dst_row[i]);
+                    let (lo, hi) = lane_range(x0, lanes, nx, cx);
+                    let d = row_ptr.offset(x0 as isize + cx as isize);
+                    for l in lo..hi {
+                        *d.add(l) = blk[i][l];
+                    }
+                    if lo == 1 {
+                        *row_ptr.add(nx - 1) = blk[i][0];
+                    }
+                    if hi < lanes {
+                        *row_ptr = blk[i][lanes - 1];
                     }
                 } else {
                     for l in 0..lanes {
@@ -540,6 +595,16 @@ impl Lattice {
             x0 += LANES;
         }
     }
+}
+
+/// The lanes `lo..hi` of a block at `x0` whose neighbour `x + off` (`|off| <= 1`) stays in the
+/// row: lane 0 wraps when `x0 = 0, off = -1`; the last lane when the block ends the row and
+/// `off = +1`.
+#[inline(always)]
+fn lane_range(x0: usize, lanes: usize, nx: usize, off: i64) -> (usize, usize) {
+    let lo = usize::from(x0 == 0 && off == -1);
+    let hi = lanes - usize::from(x0 + lanes == nx && off == 1);
+    (lo.min(hi), hi)
 }
 
 #[inline]
