@@ -87,51 +87,55 @@ pub fn moments(f: &[[f64; LANES]; Q]) -> ([f64; LANES], [[f64; LANES]; 3]) {
     (rho, u)
 }
 
-/// The nine opposite pairs `(i, OPP[i])` with `c_i` as floats.
-const PAIRS: [(usize, usize, [f64; 3], f64); 9] = [
-    (1, 10, [1.0, 0.0, 0.0], 1.0 / 18.0),
-    (2, 11, [0.0, 1.0, 0.0], 1.0 / 18.0),
-    (3, 12, [0.0, 0.0, 1.0], 1.0 / 18.0),
-    (4, 13, [1.0, 1.0, 0.0], 1.0 / 36.0),
-    (5, 14, [1.0, -1.0, 0.0], 1.0 / 36.0),
-    (6, 15, [1.0, 0.0, 1.0], 1.0 / 36.0),
-    (7, 16, [1.0, 0.0, -1.0], 1.0 / 36.0),
-    (8, 17, [0.0, 1.0, 1.0], 1.0 / 36.0),
-    (9, 18, [0.0, 1.0, -1.0], 1.0 / 36.0),
-];
+/// Calls `$body!(i, opp, cx, cy, cz, w)` for each of the nine opposite pairs, with compile-time
+/// constants, so the compiler unrolls and drops the zero velocity components.
+macro_rules! for_each_pair {
+    ($body:ident) => {
+        $body!(1, 10, 1.0, 0.0, 0.0, 1.0 / 18.0);
+        $body!(2, 11, 0.0, 1.0, 0.0, 1.0 / 18.0);
+        $body!(3, 12, 0.0, 0.0, 1.0, 1.0 / 18.0);
+        $body!(4, 13, 1.0, 1.0, 0.0, 1.0 / 36.0);
+        $body!(5, 14, 1.0, -1.0, 0.0, 1.0 / 36.0);
+        $body!(6, 15, 1.0, 0.0, 1.0, 1.0 / 36.0);
+        $body!(7, 16, 1.0, 0.0, -1.0, 1.0 / 36.0);
+        $body!(8, 17, 0.0, 1.0, 1.0, 1.0 / 36.0);
+        $body!(9, 18, 0.0, 1.0, -1.0, 1.0 / 36.0);
+    };
+}
 
 /// BGK collision of a block in place: `f ← f + ω (f_eq(u) - f)`, plus the exact-difference
 /// source `f_eq(u + Δu) - f_eq(u)` when `du` is given. Returns `(ρ, u + Δu/2)`, the physical
 /// density and velocity.
 ///
 /// The equilibrium of each opposite pair shares its even part `w ρ (1 + 4.5 (c·u)² - 1.5 u²)`
-/// and differs in the sign of the odd part `3 w ρ c·u`, which halves the arithmetic.
+/// and differs in the sign of the odd part `3 w ρ c·u`, which halves the arithmetic. Lanes are
+/// innermost, so every statement is one vector operation over the block.
 #[inline(always)]
 pub fn collide(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES]; 3]>) -> ([f64; LANES], [[f64; LANES]; 3]) {
     let (rho, u) = moments(f);
-    let mut out_u = u;
-    // Lanes innermost everywhere: each statement is one vector operation over the block.
     let mut usq = [0.0; LANES];
-    let mut wr0 = [0.0; LANES];
     for l in 0..LANES {
         usq[l] = 1.5 * (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]);
-        wr0[l] = rho[l] / 3.0;
     }
     match du {
         None => {
             for l in 0..LANES {
-                f[0][l] += omega * (wr0[l] * (1.0 - usq[l]) - f[0][l]);
+                f[0][l] += omega * (rho[l] / 3.0 * (1.0 - usq[l]) - f[0][l]);
             }
-            for (i, j, c, w) in PAIRS {
-                for l in 0..LANES {
-                    let cu = c[0] * u[0][l] + c[1] * u[1][l] + c[2] * u[2][l];
-                    let wr = w * rho[l];
-                    let even = wr * (1.0 - usq[l] + 4.5 * cu * cu);
-                    let odd = 3.0 * wr * cu;
-                    f[i][l] += omega * (even + odd - f[i][l]);
-                    f[j][l] += omega * (even - odd - f[j][l]);
-                }
+            macro_rules! pair {
+                ($i:expr, $j:expr, $cx:expr, $cy:expr, $cz:expr, $w:expr) => {
+                    for l in 0..LANES {
+                        let cu = $cx * u[0][l] + $cy * u[1][l] + $cz * u[2][l];
+                        let wr = $w * rho[l];
+                        let even = wr * (1.0 - usq[l] + 4.5 * cu * cu);
+                        let odd = 3.0 * wr * cu;
+                        f[$i][l] += omega * (even + odd - f[$i][l]);
+                        f[$j][l] += omega * (even - odd - f[$j][l]);
+                    }
+                };
             }
+            for_each_pair!(pair);
+            (rho, u)
         }
         Some(du) => {
             let mut s = [[0.0; LANES]; 3];
@@ -145,25 +149,29 @@ pub fn collide(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES];
             // f + ω (feq(u) - f) + feq(u+Δu) - feq(u) = f (1-ω) + (ω-1) feq(u) + feq(u+Δu)
             let a = omega - 1.0;
             for l in 0..LANES {
-                f[0][l] = f[0][l] * (1.0 - omega) + wr0[l] * (a * (1.0 - usq[l]) + (1.0 - ssq[l]));
+                f[0][l] = f[0][l] * (1.0 - omega) + rho[l] / 3.0 * (a * (1.0 - usq[l]) + (1.0 - ssq[l]));
             }
-            for (i, j, c, w) in PAIRS {
-                for l in 0..LANES {
-                    let cu = c[0] * u[0][l] + c[1] * u[1][l] + c[2] * u[2][l];
-                    let cs = c[0] * s[0][l] + c[1] * s[1][l] + c[2] * s[2][l];
-                    let wr = w * rho[l];
-                    let even = wr * (a * (1.0 - usq[l] + 4.5 * cu * cu) + (1.0 - ssq[l] + 4.5 * cs * cs));
-                    let odd = 3.0 * wr * (a * cu + cs);
-                    f[i][l] = f[i][l] * (1.0 - omega) + even + odd;
-                    f[j][l] = f[j][l] * (1.0 - omega) + even - odd;
-                }
+            macro_rules! pair {
+                ($i:expr, $j:expr, $cx:expr, $cy:expr, $cz:expr, $w:expr) => {
+                    for l in 0..LANES {
+                        let cu = $cx * u[0][l] + $cy * u[1][l] + $cz * u[2][l];
+                        let cs = $cx * s[0][l] + $cy * s[1][l] + $cz * s[2][l];
+                        let wr = $w * rho[l];
+                        let even = wr * (a * (1.0 - usq[l] + 4.5 * cu * cu) + (1.0 - ssq[l] + 4.5 * cs * cs));
+                        let odd = 3.0 * wr * (a * cu + cs);
+                        f[$i][l] = f[$i][l] * (1.0 - omega) + even + odd;
+                        f[$j][l] = f[$j][l] * (1.0 - omega) + even - odd;
+                    }
+                };
             }
+            for_each_pair!(pair);
+            let mut out_u = u;
             for d in 0..3 {
                 for l in 0..LANES {
                     out_u[d][l] += 0.5 * du[d][l];
                 }
             }
+            (rho, out_u)
         }
     }
-    (rho, out_u)
 }

@@ -377,11 +377,43 @@ impl Lattice {
         Ok(last)
     }
 
+    /// Sweeps one row with the best instruction set this CPU has (detected once).
+    ///
+    /// # Safety
+    /// As [`Lattice::sweep_row_generic`].
+    #[inline]
+    unsafe fn sweep_row(&self, ptr: Ptr, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            match simd_level() {
+                SimdLevel::Avx512 => return self.sweep_row_avx512(ptr, macros, odd, y, z, res),
+                SimdLevel::Avx2 => return self.sweep_row_avx2(ptr, macros, odd, y, z, res),
+                SimdLevel::Baseline => {}
+            }
+        }
+        self.sweep_row_generic(ptr, macros, odd, y, z, res)
+    }
+
+    /// [`Lattice::sweep_row_generic`] compiled for AVX-512.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx2,fma")]
+    unsafe fn sweep_row_avx512(&self, ptr: Ptr, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+        self.sweep_row_generic(ptr, macros, odd, y, z, res)
+    }
+
+    /// [`Lattice::sweep_row_generic`] compiled for AVX2 + FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn sweep_row_avx2(&self, ptr: Ptr, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+        self.sweep_row_generic(ptr, macros, odd, y, z, res)
+    }
+
     /// Sweeps one row.
     ///
     /// # Safety
     /// `ptr` points at `self.f`; no other thread works on this row's cells.
-    unsafe fn sweep_row(&self, ptr: Ptr, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+    #[inline(always)]
+    unsafe fn sweep_row_generic(&self, ptr: Ptr, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
         let (nx, ny, nz) = (self.nx, self.ny, self.nz);
         let n = nx * ny * nz;
         let row = z * ny + y;
@@ -390,13 +422,25 @@ impl Lattice {
         let prow = self.particles.row(row);
         let g = self.body_acceleration;
         let forced = !prow.is_empty() || g != [0.0; 3];
-        // Per-direction row offsets: where odd steps read (x - c_i) and write (x + c_i).
-        let mut src_row = [0usize; Q];
-        let mut dst_row = [0usize; Q];
+        let f = ptr.0;
+        // Where direction i of cell x is read from and written to: `rd[i] + x`, `wr[i] + x`
+        // (before wrapping x). Even steps: own slots, swapped. Odd steps: pull from slot ī of
+        // x - c_i, push into slot i of x + c_i.
+        let wrapc = |v: usize, d: i32, m: usize| (v as i64 + d as i64).rem_euclid(m as i64) as usize;
+        let mut rd_row = [0usize; Q];
+        let mut wr_row = [0usize; Q];
+        let mut rd_dx = [0i64; Q];
+        let mut wr_dx = [0i64; Q];
         for i in 0..Q {
-            let w = |v: usize, d: i32, m: usize| (v as i64 + d as i64).rem_euclid(m as i64) as usize;
-            src_row[i] = (w(z, -C[i][2], nz) * ny + w(y, -C[i][1], ny)) * nx;
-            dst_row[i] = (w(z, C[i][2], nz) * ny + w(y, C[i][1], ny)) * nx;
+            if odd {
+                rd_row[i] = OPP[i] * n + (wrapc(z, -C[i][2], nz) * ny + wrapc(y, -C[i][1], ny)) * nx;
+                wr_row[i] = i * n + (wrapc(z, C[i][2], nz) * ny + wrapc(y, C[i][1], ny)) * nx;
+                rd_dx[i] = -C[i][0] as i64;
+                wr_dx[i] = C[i][0] as i64;
+            } else {
+                rd_row[i] = i * n + base;
+                wr_row[i] = OPP[i] * n + base;
+            }
         }
         // |offset| <= 1, so one compare wraps (no integer division).
         let wrap = |x: i64| {
@@ -408,11 +452,14 @@ impl Lattice {
                 x as usize
             }
         };
-        let f = ptr.0;
+        let lim2 = self.velocity_limit * self.velocity_limit;
         let mut pnext = 0usize;
         let mut x0 = 0;
         while x0 < nx {
             let lanes = LANES.min(nx - x0);
+            let full = lanes == LANES && !slow;
+            // Every lane's neighbours stay in the row: plain vector loads and stores.
+            let fast = full && (!odd || (x0 >= 1 && x0 + LANES < nx));
             let mut live = [true; LANES];
             for l in lanes..LANES {
                 live[l] = false;
@@ -422,57 +469,31 @@ impl Lattice {
                     live[l] = self.kind[base + x0 + l] == 0;
                 }
             }
-            let full = lanes == LANES && !slow;
-            // A full block away from the row's ends: every lane's neighbour stays in the row.
-            let interior = full && x0 >= 1 && x0 + LANES < nx;
-            // Gather.
             let mut blk = [[1.0 / 19.0; LANES]; Q];
-            for i in 0..Q {
-                if !odd {
-                    if lanes == LANES {
-                        let s = f.add(i * n + base + x0);
-                        for l in 0..LANES {
-                            blk[i][l] = *s.add(l);
-                        }
-                    } else {
-                        for l in 0..lanes {
-                            blk[i][l] = *f.add(i * n + base + x0 + l);
-                        }
-                    }
-                } else if interior {
-                    let s = f.add(OPP[i] * n + src_row[i] + (x0 as i64 - C[i][0] as i64) as usize);
+            if fast {
+                for i in 0..Q {
+                    let s = f.add((rd_row[i] + x0) as usize).offset(rd_dx[i] as isize);
                     for l in 0..LANES {
                         blk[i][l] = *s.add(l);
                     }
-                } else if !slow {
-                    // Lanes whose source stays in the row load contiguously; at most one wraps.
-                    let cx = C[i][0] as i64;
-                    let row_ptr = f.add(OPP[i] * n + src_row[i]);
-                    let (lo, hi) = lane_range(x0, lanes, nx, -cx);
-                    let s = row_ptr.offset(x0 as isize - cx as isize);
-                    for l in lo..hi {
-                        blk[i][l] = *s.add(l);
-                    }
-                    if lo == 1 {
-                        blk[i][0] = *row_ptr.add(nx - 1);
-                    }
-                    if hi < lanes {
-                        blk[i][lanes - 1] = *row_ptr;
-                    }
-                } else {
+                }
+            } else {
+                for i in 0..Q {
                     for l in 0..lanes {
                         if !live[l] {
                             continue;
                         }
                         let x = x0 + l;
-                        let sx = wrap(x as i64 - C[i][0] as i64);
-                        let src = src_row[i] + sx;
-                        let k = if slow { self.kind[src] } else { 0 };
-                        blk[i][l] = if k != 0 {
-                            *f.add(i * n + base + x) + 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize])
-                        } else {
-                            *f.add(OPP[i] * n + src)
-                        };
+                        let sx = wrap(x as i64 + rd_dx[i]);
+                        if odd && slow {
+                            let src = rd_row[i] - OPP[i] * n + sx;
+                            let k = self.kind[src];
+                            if k != 0 {
+                                blk[i][l] = *f.add(i * n + base + x) + 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]);
+                                continue;
+                            }
+                        }
+                        blk[i][l] = *f.add(rd_row[i] + sx);
                     }
                 }
             }
@@ -507,7 +528,6 @@ impl Lattice {
             }
             let (rho, u) = collide(&mut blk, self.omega, forced.then_some(&du));
             // Health: branch-free over the block; the slow search only when something is off.
-            let lim2 = self.velocity_limit * self.velocity_limit;
             let mut u2 = [0.0; LANES];
             let mut blk_max = 0.0f64;
             let mut bad = false;
@@ -543,52 +563,30 @@ impl Lattice {
                 }
             }
             // Scatter.
-            for i in 0..Q {
-                if !odd {
-                    let dst = f.add(OPP[i] * n + base + x0);
-                    if full {
-                        for l in 0..LANES {
-                            *dst.add(l) = blk[i][l];
-                        }
-                    } else {
-                        for l in 0..lanes {
-                            if live[l] {
-                                *dst.add(l) = blk[i][l];
-                            }
-                        }
-                    }
-                } else if interior {
-                    let d = f.add(i * n + dst_row[i] + (x0 as i64 + C[i][0] as i64) as usize);
+            if fast {
+                for i in 0..Q {
+                    let d = f.add((wr_row[i] + x0) as usize).offset(wr_dx[i] as isize);
                     for l in 0..LANES {
                         *d.add(l) = blk[i][l];
                     }
-                } else if !slow {
-                    let cx = C[i][0] as i64;
-                    let row_ptr = f.add(i * n + dst_row[i]);
-                    let (lo, hi) = lane_range(x0, lanes, nx, cx);
-                    let d = row_ptr.offset(x0 as isize + cx as isize);
-                    for l in lo..hi {
-                        *d.add(l) = blk[i][l];
-                    }
-                    if lo == 1 {
-                        *row_ptr.add(nx - 1) = blk[i][0];
-                    }
-                    if hi < lanes {
-                        *row_ptr = blk[i][lanes - 1];
-                    }
-                } else {
+                }
+            } else {
+                for i in 0..Q {
                     for l in 0..lanes {
                         if !live[l] {
                             continue;
                         }
                         let x = x0 + l;
-                        let dst = dst_row[i] + wrap(x as i64 + C[i][0] as i64);
-                        let k = if slow { self.kind[dst] } else { 0 };
-                        if k != 0 {
-                            *f.add(OPP[i] * n + base + x) = blk[i][l] - 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]);
-                        } else {
-                            *f.add(i * n + dst) = blk[i][l];
+                        let dx = wrap(x as i64 + wr_dx[i]);
+                        if odd && slow {
+                            let dst = wr_row[i] - i * n + dx;
+                            let k = self.kind[dst];
+                            if k != 0 {
+                                *f.add(OPP[i] * n + base + x) = blk[i][l] - 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]);
+                                continue;
+                            }
                         }
+                        *f.add(wr_row[i] + dx) = blk[i][l];
                     }
                 }
             }
@@ -597,14 +595,34 @@ impl Lattice {
     }
 }
 
-/// The lanes `lo..hi` of a block at `x0` whose neighbour `x + off` (`|off| <= 1`) stays in the
-/// row: lane 0 wraps when `x0 = 0, off = -1`; the last lane when the block ends the row and
-/// `off = +1`.
-#[inline(always)]
-fn lane_range(x0: usize, lanes: usize, nx: usize, off: i64) -> (usize, usize) {
-    let lo = usize::from(x0 == 0 && off == -1);
-    let hi = lanes - usize::from(x0 + lanes == nx && off == 1);
-    (lo.min(hi), hi)
+/// Instruction sets the sweep is compiled for, best first.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum SimdLevel {
+    /// AVX-512F (8 f64 lanes).
+    Avx512,
+    /// AVX2 + FMA (4 f64 lanes).
+    Avx2,
+    /// The build's baseline (SSE2 on a portable x86-64 build).
+    Baseline,
+}
+
+/// The instruction set the sweep uses on this CPU; `HLBM_SIMD=baseline|avx2|avx512` caps it.
+pub fn simd_level() -> SimdLevel {
+    static LEVEL: std::sync::OnceLock<SimdLevel> = std::sync::OnceLock::new();
+    *LEVEL.get_or_init(|| {
+        let cap = std::env::var("HLBM_SIMD").unwrap_or_default();
+        #[cfg(target_arch = "x86_64")]
+        {
+            if cap != "baseline" && cap != "avx2" && std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("fma") {
+                return SimdLevel::Avx512;
+            }
+            if cap != "baseline" && std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+                return SimdLevel::Avx2;
+            }
+        }
+        let _ = cap;
+        SimdLevel::Baseline
+    })
 }
 
 #[inline]
