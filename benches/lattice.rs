@@ -1,0 +1,57 @@
+//! The lattice kernel: one block collision (in cache), and full steps of periodic boxes with
+//! and without particle nodes, on 1 and 2 threads. Criterion reports time per step; MLUPs =
+//! cells / time.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use hlbm::d3q19::{collide, LANES, Q, W};
+use hlbm::Lattice;
+
+fn block(c: &mut Criterion) {
+    let mut blk = [[0.0f64; LANES]; Q];
+    for i in 0..Q {
+        for l in 0..LANES {
+            blk[i][l] = W[i] * (1.0 + 1e-3 * l as f64);
+        }
+    }
+    let du = [[1e-4; LANES]; 3];
+    let mut g = c.benchmark_group("collide_block");
+    g.throughput(Throughput::Elements(LANES as u64));
+    g.bench_function("plain", |b| b.iter(|| collide(std::hint::black_box(&mut blk), 1.0 / 0.6, None)));
+    g.bench_function("forced", |b| b.iter(|| collide(std::hint::black_box(&mut blk), 1.0 / 0.6, Some(&du))));
+    g.finish();
+}
+
+fn covered(lat: &mut Lattice) {
+    let [nx, ny, nz] = lat.dims();
+    // Every fifth x-plane of nodes half covered: ~20 % particle nodes.
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in (0..nx).step_by(5) {
+                lat.particles.add(x, y, z, 0.5, [1e-3, 0.0, 0.0], (x / 20) as u32);
+            }
+        }
+    }
+}
+
+fn steps(c: &mut Criterion) {
+    let mut g = c.benchmark_group("lattice_step");
+    g.sample_size(10).measurement_time(std::time::Duration::from_secs(3));
+    for n in [64usize, 128] {
+        g.throughput(Throughput::Elements((n * n * n) as u64));
+        for threads in [1usize, 2] {
+            for particles in [false, true] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let mut lat = Lattice::new(n, n, n, 0.6).unwrap();
+                if particles {
+                    covered(&mut lat);
+                }
+                let id = format!("{n}^3/{threads}t/{}", if particles { "particles" } else { "fluid" });
+                g.bench_function(BenchmarkId::from_parameter(id), |b| b.iter(|| pool.install(|| lat.step().unwrap())));
+            }
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, block, steps);
+criterion_main!(benches);
