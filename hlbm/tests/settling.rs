@@ -1,0 +1,78 @@
+//! A single sphere settling in a large closed box reaches the terminal velocity of the
+//! Schiller–Naumann drag law, corrected for the box walls (Di Felice 1996).
+//!
+//! Box: 10 D × 10 D × 16 D (D = 8 cells), halfway bounce-back on all faces; τ = 0.6;
+//! ρ_p/ρ_f = 2; smoothing width 1 cell. The sphere's equation of motion is integrated
+//! explicitly with the hydrodynamic force of the lattice and the net weight (ρ_p - ρ_f) V g.
+
+use hlbm::{solid_fraction, Lattice};
+
+/// Schiller–Naumann terminal velocity for `D`, `ν`, density ratio `r`, gravity `g`.
+fn schiller_naumann(d: f64, nu: f64, r: f64, g: f64) -> f64 {
+    // Solve (r - 1) g = 3/4 C_D(Re) U² / D by fixed-point iteration on U.
+    let mut u = (r - 1.0) * g * d * d / (18.0 * nu);
+    for _ in 0..200 {
+        let re = u * d / nu;
+        let cd = 24.0 / re * (1.0 + 0.15 * re.powf(0.687));
+        u = 0.5 * u + 0.5 * ((r - 1.0) * g * d * 4.0 / (3.0 * cd)).sqrt();
+    }
+    u
+}
+
+/// Di Felice (1996): `U/U∞ = ((1 - λ)/(1 - 0.33 λ))^α`, `α = (3.3 + 0.085 Re)/(1 + 0.1 Re)`,
+/// `λ = D / W`.
+fn wall_factor(lambda: f64, re: f64) -> f64 {
+    let alpha = (3.3 + 0.085 * re) / (1.0 + 0.1 * re);
+    ((1.0 - lambda) / (1.0 - 0.33 * lambda)).powf(alpha)
+}
+
+#[test]
+fn sphere_reaches_the_schiller_naumann_terminal_velocity() {
+    let (d, tau, ratio, eps) = (8.0f64, 0.6, 2.0, 1.0);
+    let nu = (tau - 0.5) / 3.0;
+    let g = 8e-4; // lattice units: Re ≈ 10
+    let (nx, ny, nz) = (80usize, 80usize, 128usize);
+    let mut lat = Lattice::new(nx, ny, nz, tau).unwrap();
+    lat.close_faces([false, false, false]);
+    let r = d / 2.0;
+    let volume = std::f64::consts::PI / 6.0 * d * d * d;
+    let mass = ratio * volume;
+    let mut c = [nx as f64 / 2.0 - 0.5, ny as f64 / 2.0 - 0.5, nz as f64 - 3.0 * d];
+    let mut v = [0.0f64; 3];
+    let mut history = Vec::new();
+    for _ in 0..1500 {
+        lat.particles.clear();
+        let reach = r + eps;
+        for z in (c[2] - reach).floor() as usize..=(c[2] + reach).ceil() as usize {
+            for y in (c[1] - reach).floor() as usize..=(c[1] + reach).ceil() as usize {
+                for x in (c[0] - reach).floor() as usize..=(c[0] + reach).ceil() as usize {
+                    let p = [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]];
+                    let db = solid_fraction((p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - r, eps);
+                    if db > 0.0 {
+                        lat.particles.add(x, y, z, db, v, 0);
+                    }
+                }
+            }
+        }
+        let report = lat.step().unwrap();
+        let f = report.particle_forces[&0].force;
+        let weight = [0.0, 0.0, -(ratio - 1.0) * volume * g];
+        for k in 0..3 {
+            v[k] += (f[k] + weight[k]) / mass;
+            c[k] += v[k];
+        }
+        history.push(v[2]);
+        assert!(c[2] > 2.0 * d, "the sphere reached the floor");
+    }
+    let tail = &history[history.len() - 300..];
+    let u = -tail.iter().sum::<f64>() / tail.len() as f64;
+    let drift = (tail[tail.len() - 1] - tail[0]).abs() / u;
+    let u_inf = schiller_naumann(d, nu, ratio, g);
+    let re = u * d / nu;
+    let expected = u_inf * wall_factor(d / nx as f64, re);
+    let err = u / expected - 1.0;
+    println!("U = {u:.5}, Re = {re:.1}, Schiller–Naumann {u_inf:.5}, with walls {expected:.5}, error {:.2} %, drift {:.2} %", err * 100.0, drift * 100.0);
+    assert!(drift < 0.02, "not terminal yet: drift {drift}");
+    assert!((1.0..=20.0).contains(&re), "Re = {re}");
+    assert!(err.abs() < 0.05, "terminal velocity {u} vs {expected} ({:.1} %)", err * 100.0);
+}
