@@ -68,6 +68,11 @@ pub mod math {
 /// Re-export of the parry version the shapes come from.
 pub use parry3d_f64;
 
+/// The bundled homogenized lattice Boltzmann crate (feature `fluid`; a dry build never
+/// compiles it).
+#[cfg(feature = "fluid")]
+pub use hlbm;
+
 /// Everything a typical user needs.
 pub mod prelude {
     pub use crate::math::{Pose, Real, Rotation, Vector};

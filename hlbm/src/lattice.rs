@@ -76,7 +76,8 @@ pub struct Lattice {
     omega: f64,
     kind: Vec<NodeKind>,
     wall_velocity: Vec<[f64; 3]>,
-    slow_row: Vec<bool>,
+    /// Per block of `LANES` cells: a solid node lies within one cell (3×3 neighbouring rows).
+    slow_block: Vec<bool>,
     body_acceleration: [f64; 3],
     time: u64,
     /// Particle nodes; filled by the coupling before each step.
@@ -118,7 +119,7 @@ impl Lattice {
             kind: vec![0; n],
             // Kind 0: fluid; kind 1: the resting wall.
             wall_velocity: vec![[0.0; 3], [0.0; 3]],
-            slow_row: vec![false; ny * nz],
+            slow_block: vec![false; ny * nz * nx.div_ceil(LANES)],
             body_acceleration: [0.0; 3],
             time: 0,
             particles: ParticleField::new(nx, ny, nz),
@@ -182,12 +183,15 @@ impl Lattice {
         }
         let c = self.index(x, y, z);
         self.kind[c] = kind;
-        // Rows next to a solid node take the solid-aware path.
-        let (ny, nz) = (self.ny as i64, self.nz as i64);
+        // Blocks within one cell of a solid node take the solid-aware path.
+        let (nx, ny, nz) = (self.nx as i64, self.ny as i64, self.nz as i64);
+        let blocks = self.nx.div_ceil(LANES);
         for dz in -1..=1i64 {
             for dy in -1..=1i64 {
-                let (yy, zz) = ((y as i64 + dy).rem_euclid(ny), (z as i64 + dz).rem_euclid(nz));
-                self.slow_row[(zz * ny + yy) as usize] = true;
+                for dx in -1..=1i64 {
+                    let (xx, yy, zz) = ((x as i64 + dx).rem_euclid(nx), (y as i64 + dy).rem_euclid(ny), (z as i64 + dz).rem_euclid(nz));
+                    self.slow_block[(zz * ny + yy) as usize * blocks + xx as usize / LANES] = true;
+                }
             }
         }
     }
@@ -418,7 +422,8 @@ impl Lattice {
         let n = nx * ny * nz;
         let row = z * ny + y;
         let base = row * nx;
-        let slow = self.slow_row[row];
+        let blocks = nx.div_ceil(LANES);
+        let slow_blocks = &self.slow_block[row * blocks..(row + 1) * blocks];
         let prow = self.particles.row(row);
         let g = self.body_acceleration;
         let forced = !prow.is_empty() || g != [0.0; 3];
@@ -457,6 +462,7 @@ impl Lattice {
         let mut x0 = 0;
         while x0 < nx {
             let lanes = LANES.min(nx - x0);
+            let slow = slow_blocks[x0 / LANES];
             let full = lanes == LANES && !slow;
             // Every lane's neighbours stay in the row: plain vector loads and stores.
             let fast = full && (!odd || (x0 >= 1 && x0 + LANES < nx));
