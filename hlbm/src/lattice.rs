@@ -431,15 +431,18 @@ impl Lattice {
         // Where direction i of cell x is read from and written to: `rd[i] + x`, `wr[i] + x`
         // (before wrapping x). Even steps: own slots, swapped. Odd steps: pull from slot ī of
         // x - c_i, push into slot i of x + c_i.
-        let wrapc = |v: usize, d: i32, m: usize| (v as i64 + d as i64).rem_euclid(m as i64) as usize;
+        // Neighbouring y and z (index d + 1 for offset d), wrapped without division.
+        let ys = [if y == 0 { ny - 1 } else { y - 1 }, y, if y + 1 == ny { 0 } else { y + 1 }];
+        let zs = [if z == 0 { nz - 1 } else { z - 1 }, z, if z + 1 == nz { 0 } else { z + 1 }];
+        let row_at = |dy: i32, dz: i32| (zs[(dz + 1) as usize] * ny + ys[(dy + 1) as usize]) * nx;
         let mut rd_row = [0usize; Q];
         let mut wr_row = [0usize; Q];
         let mut rd_dx = [0i64; Q];
         let mut wr_dx = [0i64; Q];
         for i in 0..Q {
             if odd {
-                rd_row[i] = OPP[i] * n + (wrapc(z, -C[i][2], nz) * ny + wrapc(y, -C[i][1], ny)) * nx;
-                wr_row[i] = i * n + (wrapc(z, C[i][2], nz) * ny + wrapc(y, C[i][1], ny)) * nx;
+                rd_row[i] = OPP[i] * n + row_at(-C[i][1], -C[i][2]);
+                wr_row[i] = i * n + row_at(C[i][1], C[i][2]);
                 rd_dx[i] = -C[i][0] as i64;
                 wr_dx[i] = C[i][0] as i64;
             } else {
