@@ -41,6 +41,20 @@ pub enum Error {
         /// Second body's description.
         b: String,
     },
+    /// The time step cannot resolve a contact and the policy forbids sub-stepping further.
+    #[error("time step {dt:e} s is too large for the stiffest contact (Hertz contact time {contact_time:e} s between {pair}); use a step of at most {recommended:e} s or allow {substeps_needed} sub-steps")]
+    TimeStepTooLarge {
+        /// The step given (s).
+        dt: Real,
+        /// The largest safe (sub-)step (s).
+        recommended: Real,
+        /// The Hertz contact time that sets it (s).
+        contact_time: Real,
+        /// Sub-steps per step that would resolve it.
+        substeps_needed: usize,
+        /// Which pair, in words.
+        pair: String,
+    },
 }
 
 /// `Result` with this crate's [`Error`].

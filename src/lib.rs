@@ -45,6 +45,8 @@ pub mod error;
 pub mod force;
 pub mod material;
 pub mod overlap;
+#[cfg(feature = "rapier")]
+pub mod rapier;
 pub mod shape;
 pub mod validation;
 
@@ -67,6 +69,10 @@ pub mod math {
 
 /// Re-export of the parry version the shapes come from.
 pub use parry3d_f64;
+
+/// The rapier version the drop-in works with (f64).
+#[cfg(feature = "rapier")]
+pub use rapier3d_f64;
 
 /// The bundled homogenized lattice Boltzmann crate (feature `fluid`; a dry build never
 /// compiles it).

@@ -10,8 +10,11 @@ use crate::shape::Sdf;
 pub(crate) enum Outcome {
     /// The box around all ray hits.
     Box(Aabb),
-    /// No ray met the overlap.
-    Empty,
+    /// No ray met the overlap; the point with the smallest `max(d_A, d_B)` any ray saw.
+    Empty {
+        /// Where the rays came closest to the overlap.
+        closest: Vector,
+    },
     /// The overlap reaches a face of the box that is not a face of the conservative box.
     Truncated,
 }
@@ -21,18 +24,21 @@ pub(crate) enum Outcome {
 /// [`IntegrationMode::Count`] marches in every one of the 26 neighbour directions that stays in
 /// the box (the paper's); [`IntegrationMode::Subcell`] only along the inward axis of each face
 /// the node lies on. `conservative` is the box known to contain the overlap, when `grid` is
-/// a reused (possibly too small) box.
+/// a reused (possibly too small) box. `gaps` makes the rays search the intervals their step
+/// floor skips wherever the Lipschitz bound leaves room for a thin overlap.
 pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     grid: &Grid,
     mode: IntegrationMode,
     conservative: Option<&Aabb>,
+    gaps: bool,
 ) -> Outcome {
     let n = grid.n as i64;
     let bounds = grid.bounds();
     let tol = 1e-9 * grid.h.min_element();
     let mut lo = Vector::splat(Real::INFINITY);
     let mut hi = Vector::splat(Real::NEG_INFINITY);
+    let mut closest = (Real::INFINITY, bounds.center());
     // Faces of the box that are strictly inside the conservative box: [axis][side].
     let mut open_face = [[false; 2]; 3];
     if let Some(c) = conservative {
@@ -50,7 +56,11 @@ pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     continue;
                 }
                 let p = grid.node(i as usize, j as usize, k as usize);
-                if pair.phi(p) <= 0.0 {
+                let v0 = pair.phi(p);
+                if v0 < closest.0 {
+                    closest = (v0, p);
+                }
+                if v0 <= 0.0 {
                     for a in 0..3 {
                         if (idx[a] == 0 && open_face[a][0]) || (idx[a] == n && open_face[a][1]) {
                             return Outcome::Truncated;
@@ -61,7 +71,7 @@ pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     continue;
                 }
                 let mut march = |d: [i64; 3]| {
-                    if let Some(hit) = trace(pair, grid, &bounds, p, d, tol) {
+                    if let Some(hit) = trace(pair, grid, &bounds, p, d, tol, gaps, &mut closest) {
                         lo = lo.min(hit);
                         hi = hi.max(hit);
                     }
@@ -98,7 +108,7 @@ pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     if lo.x.is_finite() {
         Outcome::Box(Aabb::new(lo, hi))
     } else {
-        Outcome::Empty
+        Outcome::Empty { closest: closest.1 }
     }
 }
 
@@ -112,6 +122,8 @@ fn trace<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     p: Vector,
     d: [i64; 3],
     tol: Real,
+    gaps: bool,
+    closest: &mut (Real, Vector),
 ) -> Option<Vector> {
     let step = grid.h * Vector::new(d[0] as Real, d[1] as Real, d[2] as Real);
     let cell = step.length();
@@ -133,10 +145,46 @@ fn trace<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         }
         let t_next = (t + v.max(floor)).min(t_exit);
         let v_next = f(t_next);
+        if v_next < closest.0 {
+            *closest = (v_next, p + dir * t_next);
+        }
         if v_next <= 0.0 {
             let hit = crossing(f, (t, v), (t_next, v_next), tol);
             return Some(p + dir * hit);
         }
+        // The floor may step over a thin overlap; with 1-Lipschitz distances it can only hide
+        // where v + v_next < step, and only there is the interval searched (when asked: rays
+        // that are coarse for the overlap, i.e. the first search from a rough box).
+        if !gaps {
+        } else if let Some((ti, vi)) = search_gap(&f, (t, v), (t_next, v_next), 4, closest, p, dir) {
+            let hit = crossing(f, (t, v), (ti, vi), tol);
+            return Some(p + dir * hit);
+        }
         (t, v) = (t_next, v_next);
     }
+}
+
+/// A point with `f <= 0` in `(a, b)` if the Lipschitz bound leaves room for one, by recursive
+/// halving down to `depth` levels.
+fn search_gap(
+    f: &impl Fn(Real) -> Real,
+    a: (Real, Real),
+    b: (Real, Real),
+    depth: u32,
+    closest: &mut (Real, Vector),
+    p: Vector,
+    dir: Vector,
+) -> Option<(Real, Real)> {
+    if a.1 + b.1 >= b.0 - a.0 || depth == 0 {
+        return None;
+    }
+    let tm = 0.5 * (a.0 + b.0);
+    let vm = f(tm);
+    if vm < closest.0 {
+        *closest = (vm, p + dir * tm);
+    }
+    if vm <= 0.0 {
+        return Some((tm, vm));
+    }
+    search_gap(f, a, (tm, vm), depth - 1, closest, p, dir).or_else(|| search_gap(f, (tm, vm), b, depth - 1, closest, p, dir))
 }

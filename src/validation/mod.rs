@@ -1,3 +1,5 @@
 //! Validation cases with analytical solutions, shared by the examples and the tests.
 
 pub mod hertz;
+#[cfg(feature = "rapier")]
+pub mod cylinder_impact;

@@ -1,0 +1,341 @@
+//! The drop-in for rapier scenes (feature `rapier`, on by default, f64 rapier).
+//!
+//! A user keeps their [`PhysicsWorld`] — bodies, colliders, joints, gravity, their own hooks
+//! and event handlers — and replaces `world.step()` by [`DiscreteContacts::step`]. For every
+//! pair of *handled* colliders that rapier's broad phase reports, rapier's own contact response
+//! is switched off (a physics hook returns `None`), and the discrete overlap-volume force is
+//! applied instead, with contact sub-steps: each sub-step is one rapier step of `dt / n` with
+//! one solver iteration, forces computed from the poses at its start (a leapfrog). Everything
+//! else rapier does — joints, gravity, contacts of unhandled pairs, events — keeps working.
+//!
+//! ```
+//! use discrete_contact::prelude::*;
+//! use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
+//! use rapier3d_f64::prelude::*;
+//! # use discrete_contact::math::Vector;
+//! let mut world = PhysicsWorld::new();
+//! let floor = world.insert_body(RigidBodyBuilder::fixed());
+//! world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(floor));
+//! let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.0105, 0.0)));
+//! world.insert_collider(ColliderBuilder::ball(0.01).density(7800.0), Some(ball));
+//! world.integration_parameters.dt = 1e-4;
+//!
+//! let steel = Material::new(2e11, 0.3)?;
+//! let mut contacts = DiscreteContacts::new(OverlapSettings::new(6, IntegrationMode::Subcell)?, 0.9)?
+//!     .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
+//! contacts.handle_all(&mut world, steel)?;        // every convex collider
+//! for _ in 0..100 {
+//!     contacts.step(&mut world)?;                 // instead of world.step()
+//! }
+//! assert!(world.bodies[ball].translation().y > 0.009); // resting on the floor, not through it
+//! # Ok::<(), discrete_contact::Error>(())
+//! ```
+
+use std::collections::HashMap;
+
+use rapier3d_f64::prelude::{
+    ActiveHooks, ColliderHandle, ContactModificationContext, EventHandler, PairFilterContext, PhysicsHooks, PhysicsWorld,
+    RigidBodyHandle, SolverFlags,
+};
+
+use crate::contact::{BodyState, ContactModel, ContactState};
+use crate::error::{check_positive, Error, Result};
+use crate::force::BodyKinematics;
+use crate::material::{effective_modulus, Friction, Material, PairParameters, StiffnessFactor};
+use crate::math::{Pose, Real, Vector};
+use crate::overlap::OverlapSettings;
+use crate::shape::{ConvexShape, Sdf};
+
+/// What to do when the user's step cannot resolve a contact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StepPolicy {
+    /// Always this many sub-steps per step; refuse with [`Error::TimeStepTooLarge`] when a
+    /// contact needs more.
+    Fixed {
+        /// Sub-steps per step (>= 1).
+        substeps: usize,
+    },
+    /// As many sub-steps as the stiffest contact needs (at least `SUBSTEPS_PER_CONTACT` per
+    /// Hertz contact time), up to `max_substeps`; beyond that, refuse.
+    AutoSubstep {
+        /// Upper bound on sub-steps per step.
+        max_substeps: usize,
+    },
+}
+
+/// Sub-steps a contact must get within its Hertz contact time.
+pub const SUBSTEPS_PER_CONTACT: Real = 30.0;
+
+/// A handled collider: its SDF and material.
+#[derive(Clone, Debug)]
+struct Handled {
+    shape: ConvexShape,
+    material: Material,
+    /// Bounding-sphere radius (m), infinite for a half-space.
+    radius: Real,
+}
+
+/// What a step did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepStats {
+    /// Sub-steps taken.
+    pub substeps: usize,
+    /// Contacts alive at the end of the step.
+    pub contacts: usize,
+    /// Largest indentation seen during the step (m).
+    pub max_indentation: Real,
+}
+
+/// The discrete contact model applied to a rapier world.
+pub struct DiscreteContacts {
+    settings: OverlapSettings,
+    restitution: Real,
+    friction: Friction,
+    stiffness: StiffnessFactor,
+    policy: StepPolicy,
+    handled: HashMap<ColliderHandle, Handled>,
+    states: HashMap<(ColliderHandle, ColliderHandle), ContactState>,
+}
+
+/// Wraps the user's hooks: handled pairs get no rapier contact response.
+struct Hooks<'a> {
+    handled: &'a HashMap<ColliderHandle, Handled>,
+    user: &'a dyn PhysicsHooks,
+}
+
+impl PhysicsHooks for Hooks<'_> {
+    fn filter_contact_pair(&self, ctx: &PairFilterContext) -> Option<SolverFlags> {
+        if self.handled.contains_key(&ctx.collider1) && self.handled.contains_key(&ctx.collider2) {
+            None
+        } else {
+            self.user.filter_contact_pair(ctx)
+        }
+    }
+    fn filter_intersection_pair(&self, ctx: &PairFilterContext) -> bool {
+        self.user.filter_intersection_pair(ctx)
+    }
+    fn modify_solver_contacts(&self, ctx: &mut ContactModificationContext) {
+        self.user.modify_solver_contacts(ctx)
+    }
+}
+
+impl DiscreteContacts {
+    /// Contacts with this overlap resolution and restitution `0 < e <= 1`; frictionless, curved
+    /// `k`, automatic sub-stepping up to 10 000 sub-steps per step.
+    pub fn new(settings: OverlapSettings, restitution: Real) -> Result<Self> {
+        crate::error::check_range("restitution", restitution, 0.0, false, 1.0, true, "0 < e <= 1")?;
+        Ok(Self {
+            settings,
+            restitution,
+            friction: Friction::NONE,
+            stiffness: StiffnessFactor::Curved,
+            policy: StepPolicy::AutoSubstep { max_substeps: 10_000 },
+            handled: HashMap::new(),
+            states: HashMap::new(),
+        })
+    }
+
+    /// With friction for every handled pair.
+    pub fn with_friction(mut self, friction: Friction) -> Self {
+        self.friction = friction;
+        self
+    }
+
+    /// With another stiffness factor `k`.
+    pub fn with_stiffness(mut self, stiffness: StiffnessFactor) -> Self {
+        self.stiffness = stiffness;
+        self
+    }
+
+    /// With another sub-stepping policy.
+    pub fn with_policy(mut self, policy: StepPolicy) -> Self {
+        self.policy = policy;
+        self
+    }
+
+    /// Hands `collider` to the discrete contact (its shape must be convex) with `material`.
+    pub fn handle(&mut self, world: &mut PhysicsWorld, collider: ColliderHandle, material: Material) -> Result<()> {
+        let co = world.colliders.get_mut(collider).ok_or(Error::InvalidParameter {
+            name: "collider",
+            value: Real::NAN,
+            allowed: "a handle of a collider in this world",
+        })?;
+        let shape = ConvexShape::from_parry(co.shape())?;
+        let b = shape.local_bounds();
+        let radius = if b.mins.is_finite() && b.maxs.is_finite() { b.mins.abs().max(b.maxs.abs()).length() } else { Real::INFINITY };
+        co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
+        self.handled.insert(collider, Handled { shape, material, radius });
+        Ok(())
+    }
+
+    /// Hands every collider with a convex shape to the discrete contact; returns how many.
+    pub fn handle_all(&mut self, world: &mut PhysicsWorld, material: Material) -> Result<usize> {
+        let all: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
+        let mut n = 0;
+        for h in all {
+            if ConvexShape::from_parry(world.colliders[h].shape()).is_ok() {
+                self.handle(world, h, material)?;
+                n += 1;
+            }
+        }
+        Ok(n)
+    }
+
+    /// Whether the pair (in either order) is in contact now.
+    pub fn contact(&self, a: ColliderHandle, b: ColliderHandle) -> Option<&ContactState> {
+        self.states.get(&(a, b)).or_else(|| self.states.get(&(b, a)))
+    }
+
+    /// Number of live contacts.
+    pub fn contact_count(&self) -> usize {
+        self.states.len()
+    }
+
+    /// One step of `world.integration_parameters.dt`, with the world's own hooks doing nothing.
+    pub fn step(&mut self, world: &mut PhysicsWorld) -> Result<StepStats> {
+        self.step_with_events(world, &(), &())
+    }
+
+    /// One step with the user's hooks and event handler.
+    pub fn step_with_events(&mut self, world: &mut PhysicsWorld, hooks: &dyn PhysicsHooks, events: &dyn EventHandler) -> Result<StepStats> {
+        let dt = world.integration_parameters.dt;
+        check_positive("integration_parameters.dt", dt)?;
+        let substeps = self.substeps(world, dt)?;
+        let saved = (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
+        world.integration_parameters.dt = dt / substeps as Real;
+        world.integration_parameters.num_solver_iterations = 1;
+        let mut stats = StepStats { substeps, ..Default::default() };
+        let mut result = Ok(());
+        for _ in 0..substeps {
+            let applied = match self.apply_forces(world, &mut stats) {
+                Ok(a) => a,
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            };
+            world.step_with_events(&Hooks { handled: &self.handled, user: hooks }, events);
+            // Rapier keeps user forces: take ours back out, leave the user's.
+            for (h, f, t) in applied {
+                if let Some(rb) = world.bodies.get_mut(h) {
+                    rb.add_force(-f, false);
+                    rb.add_torque(-t, false);
+                }
+            }
+        }
+        world.integration_parameters.dt = saved.0;
+        world.integration_parameters.num_solver_iterations = saved.1;
+        result?;
+        stats.contacts = self.states.len();
+        Ok(stats)
+    }
+
+    fn kinematics(world: &PhysicsWorld, c: ColliderHandle) -> (Pose, BodyKinematics, Option<RigidBodyHandle>, Real) {
+        let co = &world.colliders[c];
+        let pose = *co.position();
+        match co.parent().and_then(|h| world.bodies.get(h).map(|rb| (h, rb))) {
+            Some((h, rb)) => {
+                let k = BodyKinematics { center_of_mass: rb.center_of_mass(), linvel: rb.linvel(), angvel: rb.angvel() };
+                let mass = if rb.is_dynamic() { rb.mass() } else { Real::INFINITY };
+                (pose, k, Some(h), mass)
+            }
+            None => (pose, BodyKinematics::at_rest(pose.translation), None, Real::INFINITY),
+        }
+    }
+
+    fn params(&self, a: &Handled, b: &Handled) -> Result<PairParameters> {
+        PairParameters::new(&a.material, &b.material, self.restitution)?.with_friction(self.friction).with_stiffness(self.stiffness)
+    }
+
+    /// Computes and adds the contact forces of all handled candidate pairs; returns what it added.
+    fn apply_forces(&mut self, world: &mut PhysicsWorld, stats: &mut StepStats) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
+        let pairs: Vec<(ColliderHandle, ColliderHandle)> = world
+            .narrow_phase
+            .contact_pairs()
+            .map(|p| (p.collider1, p.collider2))
+            .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b))
+            .collect();
+        let mut alive = HashMap::with_capacity(self.states.len());
+        let mut added: HashMap<RigidBodyHandle, (Vector, Vector)> = HashMap::new();
+        for (ca, cb) in pairs {
+            let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
+            let (pa, ka, ba, _) = Self::kinematics(world, ca);
+            let (pb, kb, bb, _) = Self::kinematics(world, cb);
+            let model = ContactModel::new(self.params(ha, hb)?, self.settings);
+            let mut state = self.states.get(&(ca, cb)).copied();
+            let out = model.evaluate(
+                &BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
+                &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
+                &mut state,
+            )?;
+            let (Some(out), Some(state)) = (out, state) else { continue };
+            alive.insert((ca, cb), state);
+            stats.max_indentation = stats.max_indentation.max(out.geometry.indentation);
+            let f = out.force;
+            if let Some(h) = ba {
+                let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
+                e.0 += f.force_on_a;
+                e.1 += f.torque_on_a;
+            }
+            if let Some(h) = bb {
+                let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
+                e.0 -= f.force_on_a;
+                e.1 += f.torque_on_b;
+            }
+        }
+        self.states = alive;
+        let mut applied = Vec::with_capacity(added.len());
+        for (h, (f, t)) in added {
+            if let Some(rb) = world.bodies.get_mut(h) {
+                if rb.is_dynamic() {
+                    rb.add_force(f, true);
+                    rb.add_torque(t, true);
+                    applied.push((h, f, t));
+                }
+            }
+        }
+        Ok(applied)
+    }
+
+    /// Sub-steps this step needs: the Hertz contact time
+    /// `t_H = 2.87 (m*² / (R* E*² v0))^(1/5)` of every handled candidate pair, at its current
+    /// approach speed, must span [`SUBSTEPS_PER_CONTACT`] sub-steps.
+    pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
+        let mut worst: Option<(Real, String)> = None;
+        for p in world.narrow_phase.contact_pairs() {
+            let (ca, cb) = (p.collider1, p.collider2);
+            let (Some(ha), Some(hb)) = (self.handled.get(&ca), self.handled.get(&cb)) else { continue };
+            let (_, ka, _, ma) = Self::kinematics(world, ca);
+            let (_, kb, _, mb) = Self::kinematics(world, cb);
+            let m_star = 1.0 / (1.0 / ma + 1.0 / mb);
+            if !m_star.is_finite() {
+                continue;
+            }
+            let r_star = 1.0 / (1.0 / ha.radius + 1.0 / hb.radius);
+            let e_star = effective_modulus(&ha.material, &hb.material);
+            // Relative speed bound: centre speeds plus rim speeds of the bounded bodies.
+            let rim = |k: &BodyKinematics, r: Real| if r.is_finite() { k.angvel.length() * r } else { 0.0 };
+            let v0 = ((ka.linvel - kb.linvel).length() + rim(&ka, ha.radius) + rim(&kb, hb.radius)).max(1e-3);
+            let t_h = 2.87 * (m_star * m_star / (r_star * e_star * e_star * v0)).powf(0.2);
+            if worst.as_ref().is_none_or(|w| t_h < w.0) {
+                worst = Some((t_h, format!("colliders {ca:?} and {cb:?}")));
+            }
+        }
+        let Some((t_h, pair)) = worst else {
+            return Ok(match self.policy {
+                StepPolicy::Fixed { substeps } => substeps.max(1),
+                StepPolicy::AutoSubstep { .. } => 1,
+            });
+        };
+        let recommended = t_h / SUBSTEPS_PER_CONTACT;
+        let needed = (dt / recommended).ceil().max(1.0) as usize;
+        let (allowed, chosen) = match self.policy {
+            StepPolicy::Fixed { substeps } => (substeps.max(1), substeps.max(1)),
+            StepPolicy::AutoSubstep { max_substeps } => (max_substeps.max(1), needed),
+        };
+        if needed > allowed {
+            return Err(Error::TimeStepTooLarge { dt, recommended, contact_time: t_h, substeps_needed: needed, pair });
+        }
+        Ok(chosen.max(needed))
+    }
+}
