@@ -71,7 +71,9 @@ pub const SUBSTEPS_PER_CONTACT: Real = 30.0;
 struct Handled {
     shape: ConvexShape,
     material: Material,
-    /// Bounding-sphere radius (m), infinite for a half-space.
+    /// Bounding-sphere centre in the collider frame and radius (m); radius infinite for a
+    /// half-space.
+    centre: Vector,
     radius: Real,
 }
 
@@ -162,9 +164,13 @@ impl DiscreteContacts {
         })?;
         let shape = ConvexShape::from_parry(co.shape())?;
         let b = shape.local_bounds();
-        let radius = if b.mins.is_finite() && b.maxs.is_finite() { b.mins.abs().max(b.maxs.abs()).length() } else { Real::INFINITY };
+        let (centre, radius) = if b.mins.is_finite() && b.maxs.is_finite() {
+            ((b.mins + b.maxs) * 0.5, (b.maxs - b.mins).length() * 0.5)
+        } else {
+            (Vector::ZERO, Real::INFINITY)
+        };
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
-        self.handled.insert(collider, Handled { shape, material, radius });
+        self.handled.insert(collider, Handled { shape, material, centre, radius });
         Ok(())
     }
 
@@ -297,18 +303,59 @@ impl DiscreteContacts {
         Ok(applied)
     }
 
+    /// Handled pairs that may touch during the next `dt`: rapier's candidates, plus pairs whose
+    /// bounding spheres (or sphere and half-space) can meet at their current speeds — rapier
+    /// only knows a pair after a step has run its broad phase, too late for a fast stiff impact.
+    fn lookahead_pairs(&self, world: &PhysicsWorld, dt: Real) -> Vec<(ColliderHandle, ColliderHandle)> {
+        let mut pairs: Vec<(ColliderHandle, ColliderHandle)> = world
+            .narrow_phase
+            .contact_pairs()
+            .map(|p| (p.collider1, p.collider2))
+            .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b))
+            .collect();
+        let spheres: Vec<(ColliderHandle, Vector, Real, Real, Option<Vector>)> = self
+            .handled
+            .iter()
+            .map(|(&h, hd)| {
+                let (pose, k, _, _) = Self::kinematics(world, h);
+                let speed = k.linvel.length() + if hd.radius.is_finite() { k.angvel.length() * hd.radius } else { 0.0 };
+                let normal = match hd.shape {
+                    ConvexShape::HalfSpace { normal } => Some(pose.rotation * normal),
+                    _ => None,
+                };
+                (h, pose.transform_point(hd.centre), hd.radius, speed, normal)
+            })
+            .collect();
+        for i in 0..spheres.len() {
+            for j in i + 1..spheres.len() {
+                let (a, b) = (&spheres[i], &spheres[j]);
+                let reach = (a.3 + b.3) * dt;
+                let gap = match (a.4, b.4) {
+                    (None, None) => (a.1 - b.1).length() - a.2 - b.2,
+                    (Some(n), None) => n.dot(b.1 - a.1) - b.2,
+                    (None, Some(n)) => n.dot(a.1 - b.1) - a.2,
+                    (Some(_), Some(_)) => continue,
+                };
+                if gap <= reach && !pairs.contains(&(a.0, b.0)) && !pairs.contains(&(b.0, a.0)) {
+                    pairs.push((a.0, b.0));
+                }
+            }
+        }
+        pairs
+    }
+
     /// Sub-steps this step needs: the Hertz contact time
     /// `t_H = 2.87 (m*² / (R* E*² v0))^(1/5)` of every handled candidate pair, at its current
     /// approach speed, must span [`SUBSTEPS_PER_CONTACT`] sub-steps.
     pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
         let mut worst: Option<(Real, String)> = None;
-        for p in world.narrow_phase.contact_pairs() {
-            let (ca, cb) = (p.collider1, p.collider2);
-            let (Some(ha), Some(hb)) = (self.handled.get(&ca), self.handled.get(&cb)) else { continue };
+        for (ca, cb) in self.lookahead_pairs(world, dt) {
+            let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
             let (_, ka, _, ma) = Self::kinematics(world, ca);
             let (_, kb, _, mb) = Self::kinematics(world, cb);
             let m_star = 1.0 / (1.0 / ma + 1.0 / mb);
-            if !m_star.is_finite() {
+            // Two immovable bodies, or a mass rapier has not computed yet (before its first step).
+            if !(m_star.is_finite() && m_star > 0.0) {
                 continue;
             }
             let r_star = 1.0 / (1.0 / ha.radius + 1.0 / hb.radius);
