@@ -26,8 +26,14 @@ struct Row {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let thetas: Vec<f64> = (0..=18).map(|i| 5.0 * i as f64).collect();
-    let jobs: Vec<(f64, usize, IntegrationMode)> =
-        MODES.iter().flat_map(|&m| RESOLUTIONS.iter().flat_map(move |&n| thetas.clone().into_iter().map(move |t| (t, n, m)))).collect();
+    let mut jobs = Vec::new();
+    for mode in MODES {
+        for n in RESOLUTIONS {
+            for &t in &thetas {
+                jobs.push((t, n, mode));
+            }
+        }
+    }
     eprintln!("{} impacts on {} threads …", jobs.len(), rayon::current_num_threads());
     let rows: Vec<Row> = jobs
         .par_iter()
