@@ -82,7 +82,7 @@ fn plot(path: &std::path::Path, rows: &[Row]) -> Result<(), Box<dyn std::error::
         root.fill(&WHITE)?;
         let panels = root.split_evenly((1, 2));
         for (k, area) in panels.iter().enumerate() {
-            let (title, range) = if k == 0 { ("rebound speed v+/v", -0.6..1.0) } else { ("R ω+/v", -1.8..1.8) };
+            let (title, range) = if k == 0 { ("rebound speed v+/v", -0.6..1.5) } else { ("R ω+/v", -1.8..1.8) };
             let mut ch = ChartBuilder::on(area)
                 .caption(title, ("sans-serif", 22))
                 .margin(12)
@@ -98,7 +98,7 @@ fn plot(path: &std::path::Path, rows: &[Row]) -> Result<(), Box<dyn std::error::
                     .label(format!("{} N_c={n}", mode.name()))
                     .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
             }
-            ch.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 13)).position(SeriesLabelPosition::LowerLeft).draw()?;
+            ch.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 13)).position(if k == 0 { SeriesLabelPosition::UpperLeft } else { SeriesLabelPosition::LowerLeft }).draw()?;
         }
         root.present()?;
     }
