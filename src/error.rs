@@ -55,6 +55,20 @@ pub enum Error {
         /// Which pair, in words.
         pair: String,
     },
+    /// An impact too energetic for the bodies' materials: Hertz theory puts the deepest
+    /// indentation beyond what an overlap of these bodies can represent (they would pass
+    /// through each other).
+    #[error("contact between {pair} too soft for its impact speed {speed:e} m/s: expected indentation {indentation:e} m exceeds half the smaller body's size ({limit:e} m); use a stiffer material or a lower speed")]
+    ContactTooSoft {
+        /// Which pair, in words.
+        pair: String,
+        /// Approach speed (m/s).
+        speed: Real,
+        /// Hertz maximum indentation (m).
+        indentation: Real,
+        /// The largest indentation accepted (m).
+        limit: Real,
+    },
 }
 
 /// `Result` with this crate's [`Error`].

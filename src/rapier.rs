@@ -75,6 +75,8 @@ struct Handled {
     /// half-space.
     centre: Vector,
     radius: Real,
+    /// Smallest half-extent of the bounds (m), infinite for a half-space.
+    half_size: Real,
 }
 
 /// What a step did.
@@ -164,13 +166,13 @@ impl DiscreteContacts {
         })?;
         let shape = ConvexShape::from_parry(co.shape())?;
         let b = shape.local_bounds();
-        let (centre, radius) = if b.mins.is_finite() && b.maxs.is_finite() {
-            ((b.mins + b.maxs) * 0.5, (b.maxs - b.mins).length() * 0.5)
+        let (centre, radius, half_size) = if b.mins.is_finite() && b.maxs.is_finite() {
+            ((b.mins + b.maxs) * 0.5, (b.maxs - b.mins).length() * 0.5, (b.maxs - b.mins).min_element() * 0.5)
         } else {
-            (Vector::ZERO, Real::INFINITY)
+            (Vector::ZERO, Real::INFINITY, Real::INFINITY)
         };
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
-        self.handled.insert(collider, Handled { shape, material, centre, radius });
+        self.handled.insert(collider, Handled { shape, material, centre, radius, half_size });
         Ok(())
     }
 
@@ -346,7 +348,9 @@ impl DiscreteContacts {
 
     /// Sub-steps this step needs: the Hertz contact time
     /// `t_H = 2.87 (m*² / (R* E*² v0))^(1/5)` of every handled candidate pair, at its current
-    /// approach speed, must span [`SUBSTEPS_PER_CONTACT`] sub-steps.
+    /// approach speed, must span [`SUBSTEPS_PER_CONTACT`] sub-steps. A pair whose Hertz
+    /// indentation `(15 m* v0² / (16 E* √R*))^(2/5)` exceeds half the smaller body is refused
+    /// with [`Error::ContactTooSoft`].
     pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
         let mut worst: Option<(Real, String)> = None;
         for (ca, cb) in self.lookahead_pairs(world, dt) {
@@ -364,6 +368,12 @@ impl DiscreteContacts {
             let rim = |k: &BodyKinematics, r: Real| if r.is_finite() { k.angvel.length() * r } else { 0.0 };
             let v0 = ((ka.linvel - kb.linvel).length() + rim(&ka, ha.radius) + rim(&kb, hb.radius)).max(1e-3);
             let t_h = 2.87 * (m_star * m_star / (r_star * e_star * e_star * v0)).powf(0.2);
+            // Hertz's deepest indentation; beyond half the smaller body the bodies pass through.
+            let depth = (15.0 * m_star * v0 * v0 / (16.0 * e_star * r_star.sqrt())).powf(0.4);
+            let limit = 0.5 * ha.half_size.min(hb.half_size);
+            if depth > limit {
+                return Err(Error::ContactTooSoft { pair: format!("colliders {ca:?} and {cb:?}"), speed: v0, indentation: depth, limit });
+            }
             if worst.as_ref().is_none_or(|w| t_h < w.0) {
                 worst = Some((t_h, format!("colliders {ca:?} and {cb:?}")));
             }

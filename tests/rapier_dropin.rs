@@ -69,3 +69,27 @@ fn automatic_substeps_resolve_a_stiff_impact_and_keep_user_forces() {
     assert!(rb.linvel().y > 1.5 && rb.linvel().y <= 2.0, "rebound {}", rb.linvel().y);
     assert!(rb.translation().y > 0.0099);
 }
+
+/// A fast subset of the stability matrix (the full one: `cargo run --release --example
+/// stability_report`).
+#[test]
+fn stability_cases_end_right_or_are_refused() {
+    use discrete_contact::validation::stability::Case;
+    let expect = [
+        (Case::NormalImpact { youngs: 2e11, speed: 30.0, restitution: 0.85 }, "ok"),
+        (Case::NormalImpact { youngs: 5e8, speed: 0.01, restitution: 0.1 }, "ok"),
+        (Case::NormalImpact { youngs: 5e8, speed: 1.0, restitution: 1.0 }, "ok"),
+        (Case::NormalImpact { youngs: 1e6, speed: 30.0, restitution: 0.85 }, "refused"),
+        (Case::MassRatio { ratio: 1000.0 }, "ok"),
+        (Case::Grazing, "ok"),
+        (Case::ThinPlate, "ok"),
+        (Case::RefusedStep, "refused"),
+    ];
+    for (case, verdict) in expect {
+        let o = case.run();
+        assert_eq!(o.verdict, verdict, "{}: {o:?}", case.describe());
+        if verdict == "ok" {
+            assert!(o.error <= 0.05, "{}: error {}", case.describe(), o.error);
+        }
+    }
+}

@@ -3,3 +3,5 @@
 pub mod hertz;
 #[cfg(feature = "rapier")]
 pub mod cylinder_impact;
+#[cfg(feature = "rapier")]
+pub mod stability;

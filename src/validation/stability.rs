@@ -1,0 +1,259 @@
+//! The stability matrix of the drop-in (issue: stiff materials, fast impacts, grazing hits,
+//! extreme mass ratios, thin plates, resting contact): each case either ends physically right
+//! or is refused with the time-step message — never NaN or an explosion.
+
+use std::time::Instant;
+
+use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape};
+
+use crate::error::{Error, Result};
+use crate::material::Material;
+use crate::math::{Pose, Real, Rotation, Vector};
+use crate::overlap::{IntegrationMode, OverlapSettings};
+use crate::rapier::{DiscreteContacts, StepPolicy};
+
+/// One case of the matrix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Case {
+    /// A 1 cm steel-density sphere hitting a wall head-on.
+    NormalImpact {
+        /// Young's modulus of both (Pa).
+        youngs: Real,
+        /// Impact speed (m/s).
+        speed: Real,
+        /// Restitution.
+        restitution: Real,
+    },
+    /// Two equal spheres head-on, A `ratio` times denser than B, 1 m/s, e = 0.85.
+    MassRatio {
+        /// m_A / m_B.
+        ratio: Real,
+    },
+    /// A sphere hitting the wall 89° off its normal at 1 m/s.
+    Grazing,
+    /// A 50 × 50 × 1 mm plate falling flat onto the wall at 1 m/s, e = 0.85.
+    ThinPlate,
+    /// A sphere resting on the wall under gravity for `steps` steps of 1e-3 s.
+    Resting {
+        /// Steps to run.
+        steps: usize,
+    },
+    /// A stiff fast impact with a fixed, too coarse sub-step: must be refused.
+    RefusedStep,
+}
+
+/// How a case ended.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome {
+    /// `"ok"`, `"refused"` or `"FAILED: …"`.
+    pub verdict: String,
+    /// The measured error (meaning per case, see [`Case::describe`]).
+    pub error: Real,
+    /// Largest number of sub-steps of any step.
+    pub substeps: usize,
+    /// Wall time (s).
+    pub wall_time_s: Real,
+}
+
+impl Case {
+    /// The matrix of the report.
+    pub fn matrix() -> Vec<Case> {
+        let mut v = Vec::new();
+        for youngs in [1e6, 5e8, 2e11] {
+            for speed in [0.01, 1.0, 30.0] {
+                for restitution in [0.1, 0.85, 1.0] {
+                    v.push(Case::NormalImpact { youngs, speed, restitution });
+                }
+            }
+        }
+        v.extend([Case::MassRatio { ratio: 1.0 }, Case::MassRatio { ratio: 1000.0 }, Case::Grazing, Case::ThinPlate]);
+        // 1e5 steps is the goal; at ~0.4 ms per contact evaluation and ~30 sub-steps per step
+        // while settling that takes ~20 min, so the report runs 2000 (2 s of simulated rest).
+        v.extend([Case::Resting { steps: 2000 }, Case::RefusedStep]);
+        v
+    }
+
+    /// A line naming the case and what its error measures.
+    pub fn describe(&self) -> String {
+        match self {
+            Case::NormalImpact { youngs, speed, restitution } => {
+                format!("sphere–wall E={youngs:.0e} v={speed} e={restitution} (|e_meas/e - 1|)")
+            }
+            Case::MassRatio { ratio } => format!("sphere–sphere m_A/m_B={ratio} (|e_meas/e - 1|)"),
+            Case::Grazing => "grazing hit 89° (|e_n/e - 1|)".into(),
+            Case::ThinPlate => "thin plate 50:50:1 flat (|e_meas/e - 1|)".into(),
+            Case::Resting { steps } => format!("resting sphere {steps} steps of 1 ms (drift m)"),
+            Case::RefusedStep => "E=2e11 v=30 with 1 fixed sub-step (must refuse)".into(),
+        }
+    }
+
+    /// Runs the case.
+    pub fn run(&self) -> Outcome {
+        let start = Instant::now();
+        let result = self.run_inner();
+        let wall_time_s = start.elapsed().as_secs_f64();
+        match (self, result) {
+            (Case::RefusedStep, Err(Error::TimeStepTooLarge { substeps_needed, .. })) => {
+                Outcome { verdict: "refused".into(), error: 0.0, substeps: substeps_needed, wall_time_s }
+            }
+            (Case::RefusedStep, other) => {
+                Outcome { verdict: format!("FAILED: not refused ({other:?})"), error: Real::NAN, substeps: 0, wall_time_s }
+            }
+            (_, Ok((verdict, error, substeps))) => Outcome { verdict, error, substeps, wall_time_s },
+            (_, Err(Error::TimeStepTooLarge { substeps_needed, .. })) => {
+                Outcome { verdict: "refused".into(), error: 0.0, substeps: substeps_needed, wall_time_s }
+            }
+            (_, Err(Error::ContactTooSoft { indentation, .. })) => {
+                Outcome { verdict: "refused".into(), error: indentation, substeps: 0, wall_time_s }
+            }
+            (_, Err(e)) => Outcome { verdict: format!("FAILED: {e}"), error: Real::NAN, substeps: 0, wall_time_s },
+        }
+    }
+
+    fn run_inner(&self) -> Result<(String, Real, usize)> {
+        let r = 0.005;
+        let settings = OverlapSettings::new(4, IntegrationMode::Subcell)?;
+        let mut world = PhysicsWorld::new();
+        world.gravity = Vector::ZERO;
+        world.integration_parameters.dt = 1e-4;
+        let wall = world.insert_body(RigidBodyBuilder::fixed());
+        world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(wall));
+        let sphere = |world: &mut PhysicsWorld, y: Real, v: Vector, density: Real| -> RigidBodyHandle {
+            let b = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, y, 0.0)).linvel(v).can_sleep(false));
+            world.insert_collider(ColliderBuilder::ball(r).density(density), Some(b));
+            b
+        };
+        let (e, youngs, policy) = match *self {
+            Case::NormalImpact { youngs, restitution, .. } => (restitution, youngs, StepPolicy::AutoSubstep { max_substeps: 100_000 }),
+            Case::RefusedStep => (0.85, 2e11, StepPolicy::Fixed { substeps: 1 }),
+            _ => (0.85, 5e8, StepPolicy::AutoSubstep { max_substeps: 100_000 }),
+        };
+        let mut contacts = DiscreteContacts::new(settings, e)?.with_policy(policy);
+        let speed_in = match *self {
+            Case::NormalImpact { speed, .. } => speed,
+            Case::RefusedStep => 30.0,
+            _ => 1.0,
+        };
+        // (body, normal along which the rebound is measured, approach speed along it)
+        let (body, normal, v_n) = match *self {
+            Case::NormalImpact { .. } | Case::RefusedStep => {
+                (sphere(&mut world, r + 1e-6, Vector::new(0.0, -speed_in, 0.0), 7800.0), Vector::Y, speed_in)
+            }
+            Case::Grazing => {
+                let a = 89f64.to_radians();
+                let v = Vector::new(a.sin(), -a.cos(), 0.0);
+                (sphere(&mut world, r + 1e-7, v, 7800.0), Vector::Y, a.cos())
+            }
+            Case::MassRatio { ratio } => {
+                // Free space: B at rest far from the wall, A coming at 1 m/s along -x.
+                let b = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 0.0)).can_sleep(false));
+                world.insert_collider(ColliderBuilder::ball(r).density(7800.0), Some(b));
+                let a = world.insert_body(
+                    RigidBodyBuilder::dynamic().translation(Vector::new(2.0 * r + 1e-6, 1.0, 0.0)).linvel(Vector::new(-1.0, 0.0, 0.0)).can_sleep(false),
+                );
+                world.insert_collider(ColliderBuilder::ball(r).density(7800.0 * ratio), Some(a));
+                contacts.handle_all(&mut world, Material::new(youngs, 0.3)?)?;
+                return Self::two_body(&mut world, &mut contacts, a, b, e);
+            }
+            Case::ThinPlate => {
+                let b = world.insert_body(
+                    RigidBodyBuilder::dynamic()
+                        .pose(Pose::from_parts(Vector::new(0.0, 0.0005 + 1e-6, 0.0), Rotation::IDENTITY))
+                        .linvel(Vector::new(0.0, -1.0, 0.0))
+                        .can_sleep(false),
+                );
+                world.insert_collider(ColliderBuilder::cuboid(0.025, 0.0005, 0.025).density(2700.0), Some(b));
+                (b, Vector::Y, 1.0)
+            }
+            Case::Resting { steps } => {
+                world.gravity = Vector::new(0.0, -9.81, 0.0);
+                world.integration_parameters.dt = 1e-3;
+                let b = sphere(&mut world, r, Vector::ZERO, 7800.0);
+                contacts.handle_all(&mut world, Material::new(5e8, 0.3)?)?;
+                return Self::resting(&mut world, &mut contacts, b, steps);
+            }
+        };
+        contacts.handle_all(&mut world, Material::new(youngs, 0.3)?)?;
+        let ke0 = 0.5 * world.bodies[body].mass() * speed_in * speed_in;
+        let mut touched = false;
+        let mut substeps = 0;
+        let mut lowest = Real::INFINITY;
+        // Long enough for the slowest, softest contact to end.
+        for _ in 0..200_000 {
+            let s = contacts.step(&mut world)?;
+            substeps = substeps.max(s.substeps);
+            let rb = &world.bodies[body];
+            lowest = lowest.min(rb.translation().y);
+            if !rb.translation().is_finite() {
+                return Ok(("FAILED: non-finite state".into(), Real::NAN, substeps));
+            }
+            // A stiff contact can begin and end within one step: its depth tells it was there.
+            touched |= s.max_indentation > 0.0 || s.contacts > 0;
+            if touched && s.contacts == 0 {
+                break;
+            }
+        }
+        let rb = &world.bodies[body];
+        let ke1 = 0.5 * rb.mass() * rb.linvel().length_squared() + 0.5 * rb.angvel().dot(rb.angvel()) * rb.mass() * r * r * 0.4;
+        let e_meas = rb.linvel().dot(normal) / v_n;
+        if !touched {
+            return Ok(("FAILED: no contact".into(), Real::NAN, substeps));
+        }
+        if lowest < 0.0 {
+            return Ok((format!("FAILED: tunnelled (centre at {lowest:e} m)"), Real::NAN, substeps));
+        }
+        // Sub-stepped symplectic Euler errs by O(Δt_c / t_H) per contact: with >= 30 sub-steps
+        // an elastic rebound comes out up to ~0.6 % fast; more than 1 % is a failure.
+        if ke1 > ke0 * (1.0 + 1e-2) {
+            return Ok((format!("FAILED: energy created ({:.3}×)", ke1 / ke0), Real::NAN, substeps));
+        }
+        let err = (e_meas / e - 1.0).abs();
+        let verdict = if err <= 0.05 { "ok".to_string() } else { format!("FAILED: e = {e_meas:.4}") };
+        Ok((verdict, err, substeps))
+    }
+
+    fn two_body(world: &mut PhysicsWorld, contacts: &mut DiscreteContacts, a: RigidBodyHandle, b: RigidBodyHandle, e: Real) -> Result<(String, Real, usize)> {
+        let p0 = world.bodies[a].mass() * world.bodies[a].linvel() + world.bodies[b].mass() * world.bodies[b].linvel();
+        let mut touched = false;
+        let mut substeps = 0;
+        for _ in 0..200_000 {
+            let s = contacts.step(world)?;
+            substeps = substeps.max(s.substeps);
+            touched |= s.max_indentation > 0.0 || s.contacts > 0;
+            if touched && s.contacts == 0 {
+                break;
+            }
+        }
+        let (ra, rb) = (&world.bodies[a], &world.bodies[b]);
+        let p1 = ra.mass() * ra.linvel() + rb.mass() * rb.linvel();
+        let e_meas = (rb.linvel().x - ra.linvel().x) / 1.0;
+        if (p1 - p0).length() > 1e-9 * p0.length() {
+            return Ok((format!("FAILED: momentum {p0:?} → {p1:?}"), Real::NAN, substeps));
+        }
+        let err = (-e_meas / e - 1.0).abs();
+        Ok((if err <= 0.05 { "ok".into() } else { format!("FAILED: e = {:.4}", -e_meas) }, err, substeps))
+    }
+
+    fn resting(world: &mut PhysicsWorld, contacts: &mut DiscreteContacts, b: RigidBodyHandle, steps: usize) -> Result<(String, Real, usize)> {
+        let mut substeps = 0;
+        let mut y_half = 0.0;
+        let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
+        for k in 0..steps {
+            let s = contacts.step(world)?;
+            substeps = substeps.max(s.substeps);
+            let y = world.bodies[b].translation().y;
+            if k == steps / 2 {
+                y_half = y;
+            }
+            if k >= steps / 2 {
+                lo = lo.min(y);
+                hi = hi.max(y);
+            }
+        }
+        let rb = &world.bodies[b];
+        let drift = (rb.translation().y - y_half).abs().max(hi - lo).max(rb.translation().x.abs());
+        // Tolerance: 1 µm of drift or jitter in the second half (0.02 % of the radius).
+        let ok = drift < 1e-6 && rb.linvel().length() < 1e-4;
+        Ok((if ok { "ok".into() } else { format!("FAILED: drift {drift:e} m, |v| {:e}", rb.linvel().length()) }, drift, substeps))
+    }
+}
