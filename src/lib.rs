@@ -37,6 +37,12 @@
 //!   simulation upstream: reduce the time step.
 //! - [`Error::UnboundedOverlap`] — both bodies unbounded (two half-spaces); such a pair has no
 //!   contact to compute.
+//! - [`Error::TimeStepTooLarge`] — (rapier drop-in) a step cannot give a contact 30 sub-steps
+//!   within its Hertz contact time under the chosen policy; the message names the pair, the
+//!   recommended step and the sub-steps needed. Lower `dt` or allow more sub-steps.
+//! - [`Error::ContactTooSoft`] — (rapier drop-in) Hertz puts an impact's indentation beyond half
+//!   the smaller body: the bodies would pass through each other. Use a stiffer material or a
+//!   lower speed.
 
 #![warn(missing_docs)]
 
