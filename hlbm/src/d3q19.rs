@@ -32,28 +32,21 @@ pub const C: [[i32; 3]; Q] = [
 /// Opposite direction.
 pub const OPP: [usize; Q] = [0, 10, 11, 12, 13, 14, 15, 16, 17, 18, 1, 2, 3, 4, 5, 6, 7, 8, 9];
 
-/// Lattice weights.
-pub const W: [f64; Q] = [
-    1.0 / 3.0,
-    1.0 / 18.0,
-    1.0 / 18.0,
-    1.0 / 18.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 18.0,
-    1.0 / 18.0,
-    1.0 / 18.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-    1.0 / 36.0,
-];
+/// Lattice weights: 1/3 at rest, 1/18 along the axes, 1/36 along the face diagonals.
+pub const W: [f64; Q] = {
+    let mut w = [0.0; Q];
+    let mut i = 0;
+    while i < Q {
+        let c2 = C[i][0] * C[i][0] + C[i][1] * C[i][1] + C[i][2] * C[i][2];
+        w[i] = match c2 {
+            0 => 1.0 / 3.0,
+            1 => 1.0 / 18.0,
+            _ => 1.0 / 36.0,
+        };
+        i += 1;
+    }
+    w
+};
 
 /// Second-order equilibrium `w_i ρ (1 + 3 c·u + 4.5 (c·u)² - 1.5 u²)`.
 #[inline(always)]

@@ -460,6 +460,19 @@ impl Lattice {
                 x as usize
             }
         };
+        // Where population i of cell x goes (or comes from) in this sweep: slot `stored` of the
+        // neighbour's row `row` at x + dx — unless that neighbour is solid in an odd step
+        // (halfway bounce-back): then the cell's own slot `own`, with the moving-wall term that
+        // a pull adds and a push subtracts. One rule for gather and scatter.
+        let slot = |i: usize, x: usize, row: usize, dx: i64, stored: usize, own: usize, slow: bool| -> (usize, f64) {
+            let sx = wrap(x as i64 + dx);
+            // Only blocks next to a solid node (`slow`) can have one as neighbour.
+            let k = if odd && slow { self.kind[row - stored * n + sx] } else { 0 };
+            if k != 0 {
+                return (own * n + base + x, 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]));
+            }
+            (row + sx, 0.0)
+        };
         let lim2 = self.velocity_limit * self.velocity_limit;
         let mut pnext = 0usize;
         let mut x0 = 0;
@@ -489,20 +502,10 @@ impl Lattice {
             } else {
                 for i in 0..Q {
                     for l in 0..lanes {
-                        if !live[l] {
-                            continue;
+                        if live[l] {
+                            let (at, wall) = slot(i, x0 + l, rd_row[i], rd_dx[i], OPP[i], i, slow);
+                            blk[i][l] = *f.add(at) + wall;
                         }
-                        let x = x0 + l;
-                        let sx = wrap(x as i64 + rd_dx[i]);
-                        if odd && slow {
-                            let src = rd_row[i] - OPP[i] * n + sx;
-                            let k = self.kind[src];
-                            if k != 0 {
-                                blk[i][l] = *f.add(i * n + base + x) + 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]);
-                                continue;
-                            }
-                        }
-                        blk[i][l] = *f.add(rd_row[i] + sx);
                     }
                 }
             }
@@ -582,20 +585,10 @@ impl Lattice {
             } else {
                 for i in 0..Q {
                     for l in 0..lanes {
-                        if !live[l] {
-                            continue;
+                        if live[l] {
+                            let (at, wall) = slot(i, x0 + l, wr_row[i], wr_dx[i], i, OPP[i], slow);
+                            *f.add(at) = blk[i][l] - wall;
                         }
-                        let x = x0 + l;
-                        let dx = wrap(x as i64 + wr_dx[i]);
-                        if odd && slow {
-                            let dst = wr_row[i] - i * n + dx;
-                            let k = self.kind[dst];
-                            if k != 0 {
-                                *f.add(OPP[i] * n + base + x) = blk[i][l] - 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]);
-                                continue;
-                            }
-                        }
-                        *f.add(wr_row[i] + dx) = blk[i][l];
                     }
                 }
             }

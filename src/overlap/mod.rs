@@ -363,17 +363,10 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         let grow = (p.maxs - p.mins).max_element() * 0.25;
         intersect(&Aabb::new(p.mins - Vector::splat(grow), p.maxs + Vector::splat(grow)), &rough)
     });
-    let attempt = match find_box(&pair, reused.as_ref().unwrap_or(&rough), &rough, settings.n_c, settings.mode) {
-        Some(corrected) => overlap_in_box(&pair, &corrected, &rough, settings),
-        None => Attempt::Empty,
-    };
-    let Attempt::Found(g) = attempt else { return Ok(None) };
+    let found = find_box(&pair, reused.as_ref().unwrap_or(&rough), &rough, settings.n_c, settings.mode)
+        .and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings));
+    let Some(g) = found else { return Ok(None) };
     Ok(Some(OverlapGeometry { contact_point: frame.transform_point(g.contact_point), normal: frame.rotation * g.normal, ..g }))
-}
-
-enum Attempt {
-    Found(OverlapGeometry),
-    Empty,
 }
 
 /// Finds the overlap's box, starting the search from `seed` (the conservative rough box, or
@@ -498,10 +491,10 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     corrected: &Aabb,
     rough: &Aabb,
     settings: &OverlapSettings,
-) -> Attempt {
+) -> Option<OverlapGeometry> {
     let n = settings.n_c;
     let corrected = *corrected;
-    let Some(grid) = Grid::on(&corrected, n) else { return Attempt::Empty };
+    let Some(grid) = Grid::on(&corrected, n) else { return None };
     let integral = match settings.mode {
         IntegrationMode::Count => {
             // One more node layer around the box: the surface layer of the paper's normal lies
@@ -513,13 +506,13 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             // A quarter cell of padding: flat faces on the box's faces become facets.
             let pad = grid.h * 0.25;
             let Some(padded) = Grid::on(&Aabb::new(corrected.mins - pad, corrected.maxs + pad), n) else {
-                return Attempt::Empty;
+                return None;
             };
             subcell::integrate(pair, &padded, &padded.sample(pair))
         }
     };
     if integral.volume <= 0.0 {
-        return Attempt::Empty;
+        return None;
     }
     let x_c = integral.centroid;
     let mut normal = integral.normal.normalize_or_zero();
@@ -527,11 +520,11 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         normal = pair.gradient_normal(x_c);
     }
     if normal == Vector::ZERO || !normal.is_finite() {
-        return Attempt::Empty;
+        return None;
     }
     let t_max = (rough.maxs - rough.mins).length().max(grid.h.max_element());
     let indentation = pair.exit_distance(x_c, normal, t_max) + pair.exit_distance(x_c, -normal, t_max);
-    Attempt::Found(OverlapGeometry {
+    Some(OverlapGeometry {
         volume: integral.volume,
         contact_point: x_c,
         normal,
