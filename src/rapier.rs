@@ -257,12 +257,7 @@ impl DiscreteContacts {
 
     /// Computes and adds the contact forces of all handled candidate pairs; returns what it added.
     fn apply_forces(&mut self, world: &mut PhysicsWorld, stats: &mut StepStats) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
-        let pairs: Vec<(ColliderHandle, ColliderHandle)> = world
-            .narrow_phase
-            .contact_pairs()
-            .map(|p| (p.collider1, p.collider2))
-            .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b))
-            .collect();
+        let pairs = self.candidate_pairs(world);
         let mut alive = HashMap::with_capacity(self.states.len());
         let mut added: HashMap<RigidBodyHandle, (Vector, Vector)> = HashMap::new();
         for (ca, cb) in pairs {
@@ -305,16 +300,21 @@ impl DiscreteContacts {
         Ok(applied)
     }
 
-    /// Handled pairs that may touch during the next `dt`: rapier's candidates, plus pairs whose
-    /// bounding spheres (or sphere and half-space) can meet at their current speeds — rapier
-    /// only knows a pair after a step has run its broad phase, too late for a fast stiff impact.
-    fn lookahead_pairs(&self, world: &PhysicsWorld, dt: Real) -> Vec<(ColliderHandle, ColliderHandle)> {
-        let mut pairs: Vec<(ColliderHandle, ColliderHandle)> = world
+    /// Rapier's broad-phase candidates of which both colliders are handled.
+    fn candidate_pairs(&self, world: &PhysicsWorld) -> Vec<(ColliderHandle, ColliderHandle)> {
+        world
             .narrow_phase
             .contact_pairs()
             .map(|p| (p.collider1, p.collider2))
             .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b))
-            .collect();
+            .collect()
+    }
+
+    /// Handled pairs that may touch during the next `dt`: rapier's candidates, plus pairs whose
+    /// bounding spheres (or sphere and half-space) can meet at their current speeds — rapier
+    /// only knows a pair after a step has run its broad phase, too late for a fast stiff impact.
+    fn lookahead_pairs(&self, world: &PhysicsWorld, dt: Real) -> Vec<(ColliderHandle, ColliderHandle)> {
+        let mut pairs = self.candidate_pairs(world);
         let spheres: Vec<(ColliderHandle, Vector, Real, Real, Option<Vector>)> = self
             .handled
             .iter()
