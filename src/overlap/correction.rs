@@ -2,9 +2,18 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
-use super::{crossing, Grid, IntegrationMode, Pair};
+use super::{crossing, Grid, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
+
+/// Which rays the correction marches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Rays {
+    /// Along the inward axis of each face a node lies on (cheap: finds the region).
+    Axes,
+    /// In every one of the 26 neighbour directions that stays in the box (Algorithm 1).
+    Neighbours,
+}
 
 /// What the correction found.
 pub(crate) enum Outcome {
@@ -21,15 +30,15 @@ pub(crate) enum Outcome {
 
 /// Marches from the grid's surface nodes into the box and returns the box of the hit points.
 ///
-/// [`IntegrationMode::Count`] marches in every one of the 26 neighbour directions that stays in
-/// the box (the paper's); [`IntegrationMode::Subcell`] only along the inward axis of each face
+/// [`Rays::Neighbours`] marches in every one of the 26 neighbour directions that stays in
+/// the box (the paper's); [`Rays::Axes`] only along the inward axis of each face
 /// the node lies on. `conservative` is the box known to contain the overlap, when `grid` is
 /// a reused (possibly too small) box. `gaps` makes the rays search the intervals their step
 /// floor skips wherever the Lipschitz bound leaves room for a thin overlap.
 pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     grid: &Grid,
-    mode: IntegrationMode,
+    rays: Rays,
     conservative: Option<&Aabb>,
     gaps: bool,
 ) -> Outcome {
@@ -76,8 +85,8 @@ pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                         hi = hi.max(hit);
                     }
                 };
-                match mode {
-                    IntegrationMode::Count => {
+                match rays {
+                    Rays::Neighbours => {
                         for dz in -1..=1i64 {
                             for dy in -1..=1i64 {
                                 for dx in -1..=1i64 {
@@ -90,7 +99,7 @@ pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                             }
                         }
                     }
-                    IntegrationMode::Subcell => {
+                    Rays::Axes => {
                         for a in 0..3 {
                             for (side, step) in [(0, 1), (n, -1)] {
                                 if idx[a] == side {

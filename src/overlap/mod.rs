@@ -1,17 +1,23 @@
-//! Overlap geometry of two convex bodies (DESIGN §2): rough box → Algorithm-1 correction →
-//! integration on an `N_c` grid → overlap volume, contact point, normal and indentation.
+//! Overlap geometry of two convex bodies (DESIGN §2): rough box → box search and Algorithm-1
+//! correction → integration on an `N_c` grid → overlap volume, contact point, normal and
+//! indentation.
 //!
-//! Everything is computed in the frame of body **B**, so the result is exactly invariant under
-//! a rigid motion of the pair; the returned box is in that frame too, ready to seed the next
-//! sub-step of a persistent contact.
+//! Everything is computed in the frame of A or B, whichever bounds the overlap tighter, so the
+//! result is exactly invariant under a rigid motion of the pair and does not depend on which
+//! body is called A; the returned box is in that frame too, ready to seed the next sub-step of
+//! a persistent contact.
 //!
 //! Two integration modes ([`IntegrationMode`]):
-//! - [`Count`](IntegrationMode::Count) — the paper's: count grid nodes inside both bodies,
-//!   average node positions, area-weighted surface-layer gradients for the normal. Order 1.
-//! - [`Subcell`](IntegrationMode::Subcell) — ours: the same node values of `max(d_A, d_B)` are
-//!   interpolated linearly on the six tetrahedra of every cell the surface cuts; the volume,
-//!   centroid and interface of the negative part follow in closed form. Order 2 at the cost of
-//!   counting, and with a cheaper box correction (axis rays only).
+//! - [`Count`](IntegrationMode::Count) — the paper's: Algorithm 1 with 26-direction rays, then
+//!   count grid nodes inside both bodies, average node positions, area-weighted surface-layer
+//!   gradients for the normal. Order 1.
+//! - [`Subcell`](IntegrationMode::Subcell) — ours: surface crossings on the cut grid edges by
+//!   root finding, each cut cell's six tetrahedra clipped by both surfaces; volume, centroid and
+//!   facet area vectors (the normal) in closed form. Order 2.
+//!
+//! Both find the overlap's box the same way (see `find_box`): axis rays that cannot step over
+//! a thin overlap, refinement while the hits fill a small part of the searched box, and a
+//! located seed when every ray misses.
 
 mod count;
 mod correction;
@@ -396,7 +402,7 @@ fn find_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         let grid = Grid::on(&search, n)?;
         let open = if search == *rough { None } else { Some(rough) };
         let gaps = std::mem::replace(&mut coarse, false);
-        match correction::correct(pair, &grid, IntegrationMode::Subcell, open, gaps) {
+        match correction::correct(pair, &grid, correction::Rays::Axes, open, gaps) {
             correction::Outcome::Box(b) => {
                 found = Some((b, search));
                 let (wb, ws) = (b.maxs - b.mins, search.maxs - search.mins);
@@ -425,7 +431,7 @@ fn find_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     }
     let (hits, searched) = found?;
     if mode == IntegrationMode::Count {
-        if let correction::Outcome::Box(b) = correction::correct(pair, &Grid::on(&searched, n)?, mode, None, false) {
+        if let correction::Outcome::Box(b) = correction::correct(pair, &Grid::on(&searched, n)?, correction::Rays::Neighbours, None, false) {
             return Some(b);
         }
     }
