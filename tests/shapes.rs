@@ -132,3 +132,41 @@ fn non_convex_parry_shapes_are_refused() {
     let compound = SharedShape::compound(vec![(Pose::IDENTITY, SharedShape::ball(1.0))]);
     assert!(matches!(ConvexShape::from_parry(compound.as_ref()), Err(Error::UnsupportedShape { .. })));
 }
+
+/// Brute force: the distance to the surface is the smallest exact point–triangle distance over
+/// the shape's triangulated surface; inside or outside from parry's containment test. Exact for
+/// the polyhedron and the cuboid; the cylinder's 512-gon sits within `R (1 - cos(π/512))`.
+#[test]
+fn distances_match_brute_force_over_the_surface() {
+    use discrete_contact::parry3d_f64::shape::Triangle;
+    let hull = ConvexPolyhedron::from_convex_hull(&[
+        Vector::new(0.3, 0.0, 0.0),
+        Vector::new(-0.2, 0.25, 0.1),
+        Vector::new(-0.1, -0.2, 0.3),
+        Vector::new(0.0, 0.1, -0.35),
+        Vector::new(0.1, 0.3, 0.2),
+        Vector::new(-0.25, -0.1, -0.2),
+    ])
+    .unwrap();
+    let cuboid = Cuboid::new(Vector::new(0.3, 0.2, 0.1));
+    let cylinder = Cylinder::new(0.25, 0.15);
+    let cases: Vec<(&str, &dyn Shape, (Vec<Vector>, Vec<[u32; 3]>), f64)> = vec![
+        ("polyhedron", &hull, hull.to_trimesh(), 1e-12),
+        ("cuboid", &cuboid, cuboid.to_trimesh(), 1e-12),
+        ("cylinder", &cylinder, cylinder.to_trimesh(512), 0.15 * (1.0 - (std::f64::consts::PI / 512.0).cos()) + 1e-12),
+    ];
+    let mut rng = Lcg(5);
+    for (name, shape, (pts, tris), tol) in cases {
+        let sdf = ConvexShape::from_parry(shape).unwrap();
+        for _ in 0..300 {
+            let p = rng.point(0.45);
+            let unsigned = tris
+                .iter()
+                .map(|t| Triangle::new(pts[t[0] as usize], pts[t[1] as usize], pts[t[2] as usize]).distance_to_local_point(p, false))
+                .fold(f64::INFINITY, f64::min);
+            let brute = if shape.contains_local_point(p) { -unsigned } else { unsigned };
+            let ours = sdf.distance(p);
+            assert!((ours - brute).abs() <= tol, "{name} at {p:?}: {ours} vs brute force {brute}");
+        }
+    }
+}
