@@ -1,6 +1,6 @@
 //! Time per contact evaluation (overlap geometry + force) for three pair types, both
-//! integration modes, N_c = 4, 8, 16. Each evaluation starts from the bodies' bounding boxes
-//! (a first touch), the most expensive case.
+//! integration modes, N_c = 4, 8, 16: from the bodies' bounding boxes (a first touch, the most
+//! expensive case), and as a persistent contact seeded with the previous sub-step's box.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use discrete_contact::prelude::*;
@@ -46,6 +46,15 @@ fn bench(c: &mut Criterion) {
                 assert!(model.evaluate(&a, &b, &mut None).unwrap().is_some(), "{name} must overlap");
                 group.bench_with_input(BenchmarkId::new(format!("{name}/{}", mode.name()), n), &n, |bch, _| {
                     bch.iter(|| model.evaluate(&a, &b, &mut None).unwrap())
+                });
+                // A persistent contact: last sub-step's corrected box seeds the search.
+                let mut state = None;
+                model.evaluate(&a, &b, &mut state).unwrap();
+                group.bench_with_input(BenchmarkId::new(format!("{name}/{}/persistent", mode.name()), n), &n, |bch, _| {
+                    bch.iter(|| {
+                        let mut s = state;
+                        model.evaluate(&a, &b, &mut s).unwrap()
+                    })
                 });
             }
         }

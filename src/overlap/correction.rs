@@ -6,6 +6,9 @@ use super::{crossing, Grid, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
 
+/// Accuracy of a ray's hit, per grid spacing: the box only places the grid.
+const RAY_TOL: Real = 1e-6;
+
 /// Which rays the correction marches.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Rays {
@@ -44,7 +47,7 @@ pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 ) -> Outcome {
     let n = grid.n as i64;
     let bounds = grid.bounds();
-    let tol = 1e-9 * grid.h.min_element();
+    let tol = RAY_TOL * grid.h.min_element();
     let mut lo = Vector::splat(Real::INFINITY);
     let mut hi = Vector::splat(Real::NEG_INFINITY);
     let mut closest = (Real::INFINITY, bounds.center());
@@ -158,7 +161,7 @@ fn trace<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             *closest = (v_next, p + dir * t_next);
         }
         if v_next <= 0.0 {
-            let hit = crossing(f, (t, v), (t_next, v_next), tol);
+            let hit = crossing(f, (t, v), (t_next, v_next), tol, tol);
             return Some(p + dir * hit);
         }
         // The floor may step over a thin overlap; with 1-Lipschitz distances it can only hide
@@ -166,7 +169,7 @@ fn trace<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         // that are coarse for the overlap, i.e. the first search from a rough box).
         if !gaps {
         } else if let Some((ti, vi)) = search_gap(&f, (t, v), (t_next, v_next), 4, closest, p, dir) {
-            let hit = crossing(f, (t, v), (ti, vi), tol);
+            let hit = crossing(f, (t, v), (ti, vi), tol, tol);
             return Some(p + dir * hit);
         }
         (t, v) = (t_next, v_next);

@@ -71,5 +71,6 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         centroid: if count > 0 { sum / count as Real } else { Vector::ZERO },
         normal,
         surface_area: area,
+        bounds: None,
     }
 }

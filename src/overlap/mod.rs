@@ -180,7 +180,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Pair<'_, A, B> {
         if fhi < 0.0 {
             return hi;
         }
-        crossing(f, (lo, flo), (hi, fhi), 1e-12 * t_max)
+        crossing(f, (lo, flo), (hi, fhi), 1e-12 * t_max, 0.0)
     }
 
     /// Unit normal from the SDF gradients at `x`: `∇d_B - ∇d_A`, B→A.
@@ -191,7 +191,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Pair<'_, A, B> {
 
 /// Root of `f` between `a` and `b` (values of opposite sign, or one zero) by Illinois regula
 /// falsi with a bisection every fourth step: superlinear, always bracketed, never stalls.
-pub(crate) fn crossing(f: impl Fn(Real) -> Real, a: (Real, Real), b: (Real, Real), tol: Real) -> Real {
+/// Stops when the bracket is narrower than `tol` or `|f| <= f_tol` (for a distance function,
+/// the point is then within `f_tol` of the surface).
+pub(crate) fn crossing(f: impl Fn(Real) -> Real, a: (Real, Real), b: (Real, Real), tol: Real, f_tol: Real) -> Real {
     let ((mut ta, mut fa), (mut tb, mut fb)) = (a, b);
     if fa == 0.0 {
         return ta;
@@ -205,7 +207,7 @@ pub(crate) fn crossing(f: impl Fn(Real) -> Real, a: (Real, Real), b: (Real, Real
         let inside = if ta < tb { t > ta && t < tb } else { t > tb && t < ta };
         let t = if inside && it % 4 != 3 { t } else { 0.5 * (ta + tb) };
         let ft = f(t);
-        if ft == 0.0 {
+        if ft.abs() <= f_tol {
             return t;
         }
         if (ft > 0.0) == (fa > 0.0) {
@@ -296,6 +298,8 @@ pub(crate) struct Integral {
     /// Un-normalised B→A normal (zero when the grid saw no surface).
     normal: Vector,
     surface_area: Real,
+    /// Box of the integrated pieces (sub-cell mode; `None` for counting).
+    bounds: Option<Aabb>,
 }
 
 fn intersect(a: &Aabb, b: &Aabb) -> Option<Aabb> {
@@ -369,8 +373,14 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         let grow = (p.maxs - p.mins).max_element() * 0.25;
         intersect(&Aabb::new(p.mins - Vector::splat(grow), p.maxs + Vector::splat(grow)), &rough)
     });
-    let found = find_box(&pair, reused.as_ref().unwrap_or(&rough), &rough, settings.n_c, settings.mode)
-        .and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings));
+    let followed = match (settings.mode, previous_box) {
+        (IntegrationMode::Subcell, Some(p)) if reused.is_some() => follow(&pair, p, &rough, settings.n_c),
+        _ => None,
+    };
+    let found = followed.or_else(|| {
+        find_box(&pair, reused.as_ref().unwrap_or(&rough), &rough, settings.n_c, settings.mode)
+            .and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings))
+    });
     let Some(g) = found else { return Ok(None) };
     Ok(Some(OverlapGeometry { contact_point: frame.transform_point(g.contact_point), normal: frame.rotation * g.normal, ..g }))
 }
@@ -395,7 +405,9 @@ fn find_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let mut search = *seed;
     let mut found: Option<(Aabb, Aabb)> = None; // (hits, the box they were searched in)
     let mut located = false;
-    let mut coarse = true;
+    // Rays from the conservative box are coarse for a small overlap and search their gaps;
+    // a persistent contact's box was fitted to the overlap one sub-step ago.
+    let mut coarse = seed == rough;
     // Axis rays find the region (cheap); counting mode then runs the paper's 26-direction
     // correction once on the final search box.
     for _ in 0..5 {
@@ -499,8 +511,7 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     settings: &OverlapSettings,
 ) -> Option<OverlapGeometry> {
     let n = settings.n_c;
-    let corrected = *corrected;
-    let Some(grid) = Grid::on(&corrected, n) else { return None };
+    let grid = Grid::on(corrected, n)?;
     let integral = match settings.mode {
         IntegrationMode::Count => {
             // One more node layer around the box: the surface layer of the paper's normal lies
@@ -511,12 +522,46 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         IntegrationMode::Subcell => {
             // A quarter cell of padding: flat faces on the box's faces become facets.
             let pad = grid.h * 0.25;
-            let Some(padded) = Grid::on(&Aabb::new(corrected.mins - pad, corrected.maxs + pad), n) else {
-                return None;
-            };
+            let padded = Grid::on(&Aabb::new(corrected.mins - pad, corrected.maxs + pad), n)?;
             subcell::integrate(pair, &padded, &padded.sample(pair))
         }
     };
+    finish(pair, integral, &grid, rough, *corrected)
+}
+
+/// A persistent sub-cell contact without a box search: last sub-step's box of the overlap's
+/// pieces, padded by one cell on every side, is integrated at the same spacing (`N_c + 2`
+/// cells), and the new pieces' box is next sub-step's. `None` when the overlap has reached
+/// the padding's outer node layer (it moved by more than a cell): then the search runs.
+fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, previous: &Aabb, rough: &Aabb, n: usize) -> Option<OverlapGeometry> {
+    let inner = Grid::on(&intersect(previous, rough)?, n)?;
+    let grid = Grid { lo: inner.lo - inner.h, h: inner.h, n: n + 2 };
+    let values = grid.sample(pair);
+    let m = n + 3;
+    let on_boundary = |i: usize| i == 0 || i == m - 1;
+    for k in 0..m {
+        for j in 0..m {
+            for i in 0..m {
+                let (a, b) = values[grid.index(i, j, k)];
+                if (on_boundary(i) || on_boundary(j) || on_boundary(k)) && a.max(b) <= 0.0 {
+                    return None;
+                }
+            }
+        }
+    }
+    let integral = subcell::integrate(pair, &grid, &values);
+    let pieces = integral.bounds?;
+    finish(pair, integral, &inner, rough, pieces)
+}
+
+/// Normal, indentation and the output from an integral; `None` when it found no overlap.
+fn finish<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    integral: Integral,
+    grid: &Grid,
+    rough: &Aabb,
+    corrected_box: Aabb,
+) -> Option<OverlapGeometry> {
     if integral.volume <= 0.0 {
         return None;
     }
@@ -530,12 +575,5 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     }
     let t_max = (rough.maxs - rough.mins).length().max(grid.h.max_element());
     let indentation = pair.exit_distance(x_c, normal, t_max) + pair.exit_distance(x_c, -normal, t_max);
-    Some(OverlapGeometry {
-        volume: integral.volume,
-        contact_point: x_c,
-        normal,
-        indentation,
-        surface_area: integral.surface_area,
-        corrected_box: corrected,
-    })
+    Some(OverlapGeometry { volume: integral.volume, contact_point: x_c, normal, indentation, surface_area: integral.surface_area, corrected_box })
 }

@@ -14,6 +14,8 @@
 //! facets: B's part (`d_B = 0` inside A) minus A's part — for a closed overlap both equal
 //! `|S| n`, so no gradient is evaluated.
 
+use parry3d_f64::bounding_volume::Aabb;
+
 use super::{crossing, Grid, Integral, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
@@ -22,6 +24,13 @@ use crate::shape::Sdf;
 /// around the diagonal 0–7. Along each, the corner bits only grow, so every edge is a
 /// "forward" edge from its lower corner in direction `upper ^ lower` (1..=7).
 const TETS: [[usize; 4]; 6] = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]];
+
+/// Relative accuracy of a surface crossing on an edge (fraction of the edge, and distance
+/// from the surface per edge length): far below the second-order discretisation error.
+const EDGE_TOL: Real = 1e-7;
+
+/// The same for an edge made by clipping (not shared with a neighbouring cell).
+const CLIPPED_EDGE_TOL: Real = 1e-3;
 
 /// No grid node: a point made by clipping.
 const NOT_A_NODE: u32 = u32::MAX;
@@ -85,6 +94,8 @@ struct Integrator<'p, 'a, A: ?Sized, B: ?Sized> {
     moment: Vector,
     normal: Vector,
     area: Real,
+    lo: Vector,
+    hi: Vector,
 }
 
 #[inline]
@@ -131,7 +142,10 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Integrator<'_, '_, A, B> {
         }
         let e = hi.x - lo.x;
         let f = |t: Real| self.distance(s, lo.x + e * t);
-        let t = crossing(f, (0.0, lo.d[s]), (1.0, hi.d[s]), 1e-9);
+        // An edge made by the first clip (rim cells only) is used by this cell alone: a loose
+        // crossing keeps its error within the piecewise-linear surface's.
+        let tol = if cached { EDGE_TOL } else { CLIPPED_EDGE_TOL };
+        let t = crossing(f, (0.0, lo.d[s]), (1.0, hi.d[s]), tol, tol * e.length());
         let x = lo.x + e * t;
         let other = self.distance(o, x);
         if let Some((n, k)) = slot {
@@ -206,6 +220,10 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Integrator<'_, '_, A, B> {
         for q in 0..outer.n_tets {
             let inner = self.clip(second, outer.tets[q]);
             for r in &inner.tets[..inner.n_tets] {
+                for v in r {
+                    self.lo = self.lo.min(v.x);
+                    self.hi = self.hi.max(v.x);
+                }
                 let v = tet_volume(r) * weight;
                 self.volume += v;
                 self.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
@@ -241,7 +259,16 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
     let m = n + 1;
     let h = grid.h;
     let cell = h.x * h.y * h.z;
-    let mut it = Integrator { pair, cache: EdgeCache::new(values.len(), m), volume: 0.0, moment: Vector::ZERO, normal: Vector::ZERO, area: 0.0 };
+    let mut it = Integrator {
+        pair,
+        cache: EdgeCache::new(values.len(), m),
+        volume: 0.0,
+        moment: Vector::ZERO,
+        normal: Vector::ZERO,
+        area: 0.0,
+        lo: Vector::splat(Real::INFINITY),
+        hi: Vector::splat(Real::NEG_INFINITY),
+    };
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
@@ -258,6 +285,8 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
                 if all(0, true) && all(1, true) {
                     it.volume += cell;
                     it.moment += (corners[0].x + h * 0.5) * cell;
+                    it.lo = it.lo.min(corners[0].x);
+                    it.hi = it.hi.max(corners[7].x);
                     continue;
                 }
                 for tet in TETS {
@@ -271,5 +300,6 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
         centroid: if it.volume > 0.0 { it.moment / it.volume } else { Vector::ZERO },
         normal: it.normal,
         surface_area: it.area,
+        bounds: (it.volume > 0.0).then(|| Aabb::new(it.lo, it.hi)),
     }
 }
