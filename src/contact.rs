@@ -38,10 +38,12 @@ impl<'a, S: ?Sized> BodyState<'a, S> {
 /// What a live contact remembers between sub-steps.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ContactState {
-    /// Damping constant `c` (s/m), fixed at first touch from the approach speed then.
+    /// Damping constant `c` (s/m), fixed at first touch from the approach speed then (and
+    /// lowered if the contact is later driven faster, see [`ContactModel::evaluate`]).
     pub damping: Real,
-    /// Normal approach speed at first touch (m/s).
-    pub first_approach_speed: Real,
+    /// The approach speed `c` was set from (m/s): the first touch's, or a larger one seen
+    /// later.
+    pub reference_approach_speed: Real,
     /// Last corrected overlap box (pair frame), the rough box of the next sub-step.
     pub corrected_box: Aabb,
 }
@@ -72,7 +74,8 @@ impl ContactModel {
 
     /// Evaluates the pair and updates its persistent `state`: `None` → a new contact starts
     /// (damping from the current approach speed); bodies apart → `state` is cleared and
-    /// `Ok(None)` returned.
+    /// `Ok(None)` returned. A live contact keeps its damping unless it approaches faster than
+    /// it did when `c` was set; then `c` is set anew from that speed.
     pub fn evaluate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         a: &BodyState<'_, A>,
@@ -86,11 +89,21 @@ impl ContactModel {
             *state = None;
             return Ok(None);
         };
-        let s = state.get_or_insert_with(|| {
-            let x = geometry.contact_point;
-            let v0 = -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
-            ContactState { damping: self.params.damping_for(v0), first_approach_speed: v0, corrected_box: geometry.corrected_box }
+        let x = geometry.contact_point;
+        let approach = -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
+        let s = state.get_or_insert_with(|| ContactState {
+            damping: self.params.damping_for(approach),
+            reference_approach_speed: approach,
+            corrected_box: geometry.corrected_box,
         });
+        // In a binary impact the approach speed only falls after first touch. A contact that
+        // a third body drives faster (a pile, a contact begun while sliding) re-bases `c` on
+        // the larger speed, so `c ḋ` never exceeds `a(e)`: a contact begun at a crawl would
+        // otherwise multiply a later impact's force by `1 + a(e) ḋ / v_crawl` and explode.
+        if approach > s.reference_approach_speed.max(self.params.min_approach_speed) {
+            s.damping = self.params.damping_for(approach);
+            s.reference_approach_speed = approach;
+        }
         s.corrected_box = geometry.corrected_box;
         let force = contact_force(&self.params, s.damping, &geometry, &a.kinematics, &b.kinematics);
         Ok(Some(ContactOutput { geometry, force }))

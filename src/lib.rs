@@ -26,6 +26,13 @@
 //! # Ok::<(), discrete_contact::Error>(())
 //! ```
 //!
+//! ## Cargo features
+//! - `rapier` (default): the drop-in for rapier3d-f64 scenes ([`rapier`] module).
+//! - `parallel` (default): a step's contacts are evaluated on all cores (rayon); forces are
+//!   summed in a fixed order, so results do not depend on the thread count.
+//! - `fluid`: re-exports the bundled lattice Boltzmann crate `hlbm` for wet runs; a dry build
+//!   never compiles it.
+//!
 //! ## Errors
 //! Every fallible call returns [`Error`]; its variants are the catalogue:
 //! - [`Error::InvalidParameter`] — a scalar outside its range (`E > 0`, `0 <= ν <= 0.5`,
@@ -38,7 +45,8 @@
 //! - [`Error::UnboundedOverlap`] — both bodies unbounded (two half-spaces); such a pair has no
 //!   contact to compute.
 //! - [`Error::TimeStepTooLarge`] — (rapier drop-in) a step cannot give a contact 30 sub-steps
-//!   within its Hertz contact time under the chosen policy; the message names the pair, the
+//!   (or the number set with `with_substeps_per_contact`) within its Hertz contact time under
+//!   the chosen policy; the message names the pair, the
 //!   recommended step and the sub-steps needed. Lower `dt` or allow more sub-steps.
 //! - [`Error::ContactTooSoft`] — (rapier drop-in) Hertz puts an impact's indentation beyond half
 //!   the smaller body: the bodies would pass through each other. Use a stiffer material or a

@@ -55,7 +55,7 @@ pub enum StepPolicy {
         /// Sub-steps per step (>= 1).
         substeps: usize,
     },
-    /// As many sub-steps as the stiffest contact needs (at least `SUBSTEPS_PER_CONTACT` per
+    /// As many sub-steps as the stiffest contact needs (by default [`SUBSTEPS_PER_CONTACT`] per
     /// Hertz contact time), up to `max_substeps`; beyond that, refuse.
     AutoSubstep {
         /// Upper bound on sub-steps per step.
@@ -63,8 +63,13 @@ pub enum StepPolicy {
     },
 }
 
-/// Sub-steps a contact must get within its Hertz contact time.
+/// Sub-steps a contact gets within its Hertz contact time by default: restitution within about
+/// 1 % of `e`. [`DiscreteContacts::with_substeps_per_contact`] trades accuracy for speed.
 pub const SUBSTEPS_PER_CONTACT: Real = 30.0;
+
+/// The fewest sub-steps per Hertz contact time accepted: the explicit integration of the
+/// stiffest contact stays stable with a margin.
+pub const MIN_SUBSTEPS_PER_CONTACT: Real = 5.0;
 
 /// A handled collider: its SDF and material.
 #[derive(Clone, Debug)]
@@ -77,6 +82,14 @@ struct Handled {
     radius: Real,
     /// Smallest half-extent of the bounds (m), infinite for a half-space.
     half_size: Real,
+}
+
+/// One evaluated contact, before its forces are summed.
+struct Evaluated {
+    pair: (ColliderHandle, ColliderHandle),
+    bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
+    out: crate::contact::ContactOutput,
+    state: ContactState,
 }
 
 /// What a step did.
@@ -97,6 +110,7 @@ pub struct DiscreteContacts {
     friction: Friction,
     stiffness: StiffnessFactor,
     policy: StepPolicy,
+    substeps_per_contact: Real,
     handled: HashMap<ColliderHandle, Handled>,
     states: HashMap<(ColliderHandle, ColliderHandle), ContactState>,
 }
@@ -134,6 +148,7 @@ impl DiscreteContacts {
             friction: Friction::NONE,
             stiffness: StiffnessFactor::Curved,
             policy: StepPolicy::AutoSubstep { max_substeps: 10_000 },
+            substeps_per_contact: SUBSTEPS_PER_CONTACT,
             handled: HashMap::new(),
             states: HashMap::new(),
         })
@@ -155,6 +170,15 @@ impl DiscreteContacts {
     pub fn with_policy(mut self, policy: StepPolicy) -> Self {
         self.policy = policy;
         self
+    }
+
+    /// With `n` sub-steps per Hertz contact time instead of [`SUBSTEPS_PER_CONTACT`] (at least
+    /// [`MIN_SUBSTEPS_PER_CONTACT`]): fewer sub-steps are cheaper and less accurate (a settling
+    /// pile needs far fewer than a restitution measurement).
+    pub fn with_substeps_per_contact(mut self, n: Real) -> Result<Self> {
+        self.substeps_per_contact =
+            crate::error::check_range("substeps_per_contact", n, MIN_SUBSTEPS_PER_CONTACT, true, 1e6, true, "5 <= n <= 1e6")?;
+        Ok(self)
     }
 
     /// Hands `collider` to the discrete contact (its shape must be convex) with `material`.
@@ -256,39 +280,68 @@ impl DiscreteContacts {
     }
 
     /// Computes and adds the contact forces of all handled candidate pairs; returns what it added.
+    ///
+    /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
+    /// candidates' order afterwards, so the result does not depend on the thread count.
     fn apply_forces(&mut self, world: &mut PhysicsWorld, stats: &mut StepStats) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
         let pairs = self.candidate_pairs(world);
-        let mut alive = HashMap::with_capacity(self.states.len());
-        let mut added: HashMap<RigidBodyHandle, (Vector, Vector)> = HashMap::new();
-        for (ca, cb) in pairs {
-            let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
-            let (pa, ka, ba, _) = Self::kinematics(world, ca);
-            let (pb, kb, bb, _) = Self::kinematics(world, cb);
-            let model = ContactModel::new(self.params(ha, hb)?, self.settings);
-            let mut state = self.states.get(&(ca, cb)).copied();
+        let eps = self.settings.enlargement();
+        let this = &*self;
+        let w = &*world;
+        let evaluate = |&(ca, cb): &(ColliderHandle, ColliderHandle)| -> Result<Option<Evaluated>> {
+            let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
+            let (pa, ka, ba, _) = Self::kinematics(w, ca);
+            let (pb, kb, bb, _) = Self::kinematics(w, cb);
+            // Parry's exact distance (GJK) rules out candidates that do not touch for a
+            // fraction of an evaluation's cost.
+            let apart = parry3d_f64::query::distance(&pa, w.colliders[ca].shape(), &pb, w.colliders[cb].shape())
+                .is_ok_and(|d| d.distance > eps[0] + eps[1]);
+            if apart {
+                return Ok(None);
+            }
+            let model = ContactModel::new(this.params(ha, hb)?, this.settings);
+            let mut state = this.states.get(&(ca, cb)).copied();
             let out = model.evaluate(
                 &BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
                 &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
                 &mut state,
             )?;
-            let (Some(out), Some(state)) = (out, state) else { continue };
-            alive.insert((ca, cb), state);
+            Ok(out.zip(state).map(|(out, state)| Evaluated { pair: (ca, cb), bodies: (ba, bb), out, state }))
+        };
+        #[cfg(feature = "parallel")]
+        let evaluated: Vec<Result<Option<Evaluated>>> = {
+            use rayon::prelude::*;
+            pairs.par_iter().map(evaluate).collect()
+        };
+        #[cfg(not(feature = "parallel"))]
+        let evaluated: Vec<Result<Option<Evaluated>>> = pairs.iter().map(evaluate).collect();
+
+        let mut alive = HashMap::with_capacity(self.states.len());
+        let mut added: Vec<(RigidBodyHandle, Vector, Vector)> = Vec::new();
+        let mut slot: HashMap<RigidBodyHandle, usize> = HashMap::new();
+        let mut add = |h: RigidBodyHandle, f: Vector, t: Vector| {
+            let i = *slot.entry(h).or_insert_with(|| {
+                added.push((h, Vector::ZERO, Vector::ZERO));
+                added.len() - 1
+            });
+            added[i].1 += f;
+            added[i].2 += t;
+        };
+        for e in evaluated {
+            let Some(Evaluated { pair, bodies, out, state }) = e? else { continue };
+            alive.insert(pair, state);
             stats.max_indentation = stats.max_indentation.max(out.geometry.indentation);
             let f = out.force;
-            if let Some(h) = ba {
-                let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
-                e.0 += f.force_on_a;
-                e.1 += f.torque_on_a;
+            if let Some(h) = bodies.0 {
+                add(h, f.force_on_a, f.torque_on_a);
             }
-            if let Some(h) = bb {
-                let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
-                e.0 -= f.force_on_a;
-                e.1 += f.torque_on_b;
+            if let Some(h) = bodies.1 {
+                add(h, -f.force_on_a, f.torque_on_b);
             }
         }
         self.states = alive;
         let mut applied = Vec::with_capacity(added.len());
-        for (h, (f, t)) in added {
+        for (h, f, t) in added {
             if let Some(rb) = world.bodies.get_mut(h) {
                 if rb.is_dynamic() {
                     rb.add_force(f, true);
@@ -348,7 +401,8 @@ impl DiscreteContacts {
 
     /// Sub-steps this step needs: the Hertz contact time
     /// `t_H = 2.87 (m*² / (R* E*² v0))^(1/5)` of every handled candidate pair, at its current
-    /// approach speed, must span [`SUBSTEPS_PER_CONTACT`] sub-steps. A pair whose Hertz
+    /// approach speed, must span [`SUBSTEPS_PER_CONTACT`] sub-steps (or the number set with
+    /// [`with_substeps_per_contact`](Self::with_substeps_per_contact)). A pair whose Hertz
     /// indentation `(15 m* v0² / (16 E* √R*))^(2/5)` exceeds half the smaller body is refused
     /// with [`Error::ContactTooSoft`].
     pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
@@ -384,7 +438,7 @@ impl DiscreteContacts {
                 StepPolicy::AutoSubstep { .. } => 1,
             });
         };
-        let recommended = t_h / SUBSTEPS_PER_CONTACT;
+        let recommended = t_h / self.substeps_per_contact;
         let needed = (dt / recommended).ceil().max(1.0) as usize;
         let (allowed, chosen) = match self.policy {
             StepPolicy::Fixed { substeps } => (substeps.max(1), substeps.max(1)),

@@ -248,3 +248,25 @@ fn persistent_contact_is_as_accurate_as_a_fresh_evaluation() {
     println!("mean relative volume error: followed {followed_err:.4}, fresh {fresh_err:.4}");
     assert!(followed_err <= 0.04 && followed_err <= 1.2 * fresh_err, "followed {followed_err:.4}, fresh {fresh_err:.4}");
 }
+
+/// A contact begun at a crawl and then driven hard (a third body lands on the pair) re-bases
+/// its damping on the faster approach: `c ḋ <= a(e)`, so the force stays within `1 + a(e)`
+/// times the elastic force instead of growing with `ḋ / v_crawl`.
+#[test]
+fn damping_rebases_when_a_contact_is_driven_faster() {
+    let ball = ConvexShape::ball(0.1).unwrap();
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    let m = model(IntegrationMode::Subcell, 6, 0.5);
+    let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
+    let mut state: Option<ContactState> = None;
+    let at = |v: f64| BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.0995, 0.0))).moving(Vector::new(0.0, -v, 0.0), Vector::ZERO);
+    m.evaluate(&at(1e-3), &wall, &mut state).unwrap().unwrap();
+    let crawl = state.unwrap().damping;
+    let hard = m.evaluate(&at(2.0), &wall, &mut state).unwrap().unwrap();
+    let elastic = discrete_contact::normal_force(&m.params, 0.0, &hard.geometry, 0.0);
+    let a = damping_from_restitution(0.5, 1.0).unwrap();
+    assert_relative_eq!(state.unwrap().damping, a / 2.0, max_relative = 1e-12);
+    assert!(state.unwrap().damping < crawl);
+    let ratio = hard.force.normal_force / elastic;
+    assert_relative_eq!(ratio, 1.0 + a, max_relative = 1e-9);
+}

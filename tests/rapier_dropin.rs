@@ -93,3 +93,28 @@ fn stability_cases_end_right_or_are_refused() {
         }
     }
 }
+
+/// A step's contacts are evaluated in parallel and summed in a fixed order: the drop_in scene
+/// ends bit-identical on one thread and on two.
+#[test]
+fn contact_forces_do_not_depend_on_the_thread_count() {
+    use discrete_contact::validation::drop_in::bin_scene;
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let mut scene = bin_scene(12);
+            let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+                .unwrap()
+                .with_substeps_per_contact(6.0)
+                .unwrap();
+            contacts.handle_all(&mut scene.world, Material::new(5e6, 0.4).unwrap()).unwrap();
+            let mut touched = 0;
+            for _ in 0..60 {
+                touched = touched.max(contacts.step(&mut scene.world).unwrap().contacts);
+            }
+            assert!(touched >= 4, "the bodies must land: {touched} contacts");
+            scene.bodies.iter().map(|h| (scene.world.bodies[*h].translation(), scene.world.bodies[*h].angvel())).collect::<Vec<_>>()
+        })
+    };
+    assert_eq!(run(1), run(2));
+}

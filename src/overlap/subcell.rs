@@ -77,19 +77,14 @@ impl EdgeCache {
     }
 }
 
-/// Up to three tetrahedra and the cut facet (up to four vertices), oriented by `outward`.
-#[derive(Default)]
-struct Clip {
-    tets: [[Vert; 4]; 3],
-    n_tets: usize,
-    facet: [Vert; 4],
-    n_facet: usize,
-    outward: Vector,
-}
-
-struct Integrator<'p, 'a, A: ?Sized, B: ?Sized> {
+/// Finds surface crossings on edges (cached on grid edges).
+struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     pair: &'p Pair<'a, A, B>,
     cache: EdgeCache,
+}
+
+/// Volume, moment, normal and bounds summed over the clipped pieces.
+struct Sums {
     volume: Real,
     moment: Vector,
     normal: Vector,
@@ -104,10 +99,10 @@ fn tet_volume(p: &[Vert; 4]) -> Real {
 }
 
 /// Area vector of a convex polygon (fan), oriented along `outward`.
-fn area_vector(poly: &[Vector], outward: Vector) -> Vector {
+fn area_vector(poly: &[Vert], outward: Vector) -> Vector {
     let mut a = Vector::ZERO;
     for i in 1..poly.len().saturating_sub(1) {
-        a += (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]);
+        a += (poly[i].x - poly[0].x).cross(poly[i + 1].x - poly[0].x);
     }
     a *= 0.5;
     if a.dot(outward) < 0.0 {
@@ -117,7 +112,7 @@ fn area_vector(poly: &[Vector], outward: Vector) -> Vector {
     }
 }
 
-impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Integrator<'_, '_, A, B> {
+impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     fn distance(&self, s: usize, x: Vector) -> Real {
         if s == 0 {
             self.pair.a.distance(x)
@@ -127,7 +122,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Integrator<'_, '_, A, B> {
     }
 
     /// The point where body `s`'s surface crosses the edge `p`–`q` (`p` inside, `q` outside).
-    fn cut(&mut self, s: usize, p: Vert, q: Vert) -> Vert {
+    fn cut(&mut self, s: usize, p: &Vert, q: &Vert) -> Vert {
         let o = 1 - s;
         let (lo, hi) = if p.node < q.node { (p, q) } else { (q, p) };
         let cached = hi.node != NOT_A_NODE;
@@ -156,9 +151,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Integrator<'_, '_, A, B> {
         Vert { x, d, node: NOT_A_NODE }
     }
 
-    /// Keeps the part of tetrahedron `p` inside body `s`.
-    fn clip(&mut self, s: usize, p: [Vert; 4]) -> Clip {
-        let mut out = Clip::default();
+    /// Splits tetrahedron `p` by body `s`'s surface: calls `piece` with each tetrahedron of
+    /// the part inside `s`, and `facet` with the cut polygon and a vector pointing out of `s`.
+    fn clip(&mut self, s: usize, p: &[Vert; 4], piece: &mut impl FnMut(&mut Self, &[Vert; 4]), facet: &mut impl FnMut(&[Vert], Vector)) {
         let (mut neg, mut pos) = ([0usize; 4], [0usize; 4]);
         let (mut nn, mut np) = (0, 0);
         for i in 0..4 {
@@ -170,85 +165,86 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Integrator<'_, '_, A, B> {
                 np += 1;
             }
         }
+        let outward = || {
+            let mean = |idx: &[usize]| idx.iter().map(|&i| p[i].x).sum::<Vector>() / idx.len() as Real;
+            mean(&pos[..np]) - mean(&neg[..nn])
+        };
         match nn {
-            0 => return out,
-            4 => {
-                out.tets[0] = p;
-                out.n_tets = 1;
-                return out;
-            }
+            0 => {}
+            4 => piece(self, p),
             1 => {
                 let (i, [a, b, c]) = (neg[0], [pos[0], pos[1], pos[2]]);
-                let q = [self.cut(s, p[i], p[a]), self.cut(s, p[i], p[b]), self.cut(s, p[i], p[c])];
-                out.tets[0] = [p[i], q[0], q[1], q[2]];
-                out.n_tets = 1;
-                out.facet[..3].copy_from_slice(&q);
-                out.n_facet = 3;
+                let q = [self.cut(s, &p[i], &p[a]), self.cut(s, &p[i], &p[b]), self.cut(s, &p[i], &p[c])];
+                piece(self, &[p[i], q[0], q[1], q[2]]);
+                facet(&q, outward());
             }
             3 => {
                 // Prism (a, b, c) – (qa, qb, qc) as three tetrahedra.
                 let (i, [a, b, c]) = (pos[0], [neg[0], neg[1], neg[2]]);
-                let q = [self.cut(s, p[a], p[i]), self.cut(s, p[b], p[i]), self.cut(s, p[c], p[i])];
-                out.tets = [[p[a], p[b], p[c], q[2]], [p[a], p[b], q[1], q[2]], [p[a], q[0], q[1], q[2]]];
-                out.n_tets = 3;
-                out.facet[..3].copy_from_slice(&q);
-                out.n_facet = 3;
+                let q = [self.cut(s, &p[a], &p[i]), self.cut(s, &p[b], &p[i]), self.cut(s, &p[c], &p[i])];
+                piece(self, &[p[a], p[b], p[c], q[2]]);
+                piece(self, &[p[a], p[b], q[1], q[2]]);
+                piece(self, &[p[a], q[0], q[1], q[2]]);
+                facet(&q, outward());
             }
             _ => {
                 // Wedge (a, ac, ad) – (b, bc, bd) as three tetrahedra.
                 let ([a, b], [c, d]) = ([neg[0], neg[1]], [pos[0], pos[1]]);
-                let (ac, ad) = (self.cut(s, p[a], p[c]), self.cut(s, p[a], p[d]));
-                let (bc, bd) = (self.cut(s, p[b], p[c]), self.cut(s, p[b], p[d]));
-                out.tets = [[p[a], ac, ad, bd], [p[a], ac, bc, bd], [p[a], p[b], bc, bd]];
-                out.n_tets = 3;
-                out.facet = [ac, bc, bd, ad];
-                out.n_facet = 4;
+                let (ac, ad) = (self.cut(s, &p[a], &p[c]), self.cut(s, &p[a], &p[d]));
+                let (bc, bd) = (self.cut(s, &p[b], &p[c]), self.cut(s, &p[b], &p[d]));
+                piece(self, &[p[a], ac, ad, bd]);
+                piece(self, &[p[a], ac, bc, bd]);
+                piece(self, &[p[a], p[b], bc, bd]);
+                facet(&[ac, bc, bd, ad], outward());
             }
         }
-        let mean = |idx: &[usize]| idx.iter().map(|&i| p[i].x).sum::<Vector>() / idx.len() as Real;
-        out.outward = mean(&pos[..np]) - mean(&neg[..nn]);
-        out
     }
 
-    /// Clips `p` by body `first`, then by the other: adds half the volume and moment (the
-    /// other order adds the other half) and the other body's facets to the normal.
-    fn ordered(&mut self, first: usize, p: [Vert; 4], weight: Real) {
+    /// Clips `p` by body `first`, then by the other: adds `weight` times the volume and
+    /// moment (the other order adds the rest) and the other body's facets to the normal.
+    fn ordered(&mut self, first: usize, p: &[Vert; 4], weight: Real, sums: &mut Sums) {
         let second = 1 - first;
-        let outer = self.clip(first, p);
         // B's outward normal points from B to A, A's from A to B.
         let sign = if second == 1 { 1.0 } else { -1.0 };
-        for q in 0..outer.n_tets {
-            let inner = self.clip(second, outer.tets[q]);
-            for r in &inner.tets[..inner.n_tets] {
-                for v in r {
-                    self.lo = self.lo.min(v.x);
-                    self.hi = self.hi.max(v.x);
-                }
-                let v = tet_volume(r) * weight;
-                self.volume += v;
-                self.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
-            }
-            if inner.n_facet > 0 {
-                let poly: [Vector; 4] = inner.facet.map(|v| v.x);
-                let a = area_vector(&poly[..inner.n_facet], inner.outward);
-                self.normal += a * sign;
-                self.area += a.length();
-            }
-        }
+        self.clip(
+            first,
+            p,
+            &mut |cutter, outer| {
+                cutter.clip(
+                    second,
+                    outer,
+                    &mut |_, r| {
+                        for v in r {
+                            sums.lo = sums.lo.min(v.x);
+                            sums.hi = sums.hi.max(v.x);
+                        }
+                        let v = tet_volume(r) * weight;
+                        sums.volume += v;
+                        sums.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
+                    },
+                    &mut |poly, outward| {
+                        let a = area_vector(poly, outward);
+                        sums.normal += a * sign;
+                        sums.area += a.length();
+                    },
+                )
+            },
+            &mut |_, _| {},
+        );
     }
 
     /// The overlap inside one tetrahedron of grid nodes. Where only one surface cuts it, one
     /// clip does; where both do (the rim), both clipping orders run and are averaged, so the
     /// result does not depend on which body is A.
-    fn tet(&mut self, p: [Vert; 4]) {
+    fn tet(&mut self, p: &[Vert; 4], sums: &mut Sums) {
         let inside = |s: usize| p.iter().all(|v| v.d[s] <= 0.0);
         if inside(0) {
-            self.ordered(0, p, 1.0);
+            self.ordered(0, p, 1.0, sums);
         } else if inside(1) {
-            self.ordered(1, p, 1.0);
+            self.ordered(1, p, 1.0, sums);
         } else {
-            self.ordered(0, p, 0.5);
-            self.ordered(1, p, 0.5);
+            self.ordered(0, p, 0.5, sums);
+            self.ordered(1, p, 0.5, sums);
         }
     }
 }
@@ -259,16 +255,9 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
     let m = n + 1;
     let h = grid.h;
     let cell = h.x * h.y * h.z;
-    let mut it = Integrator {
-        pair,
-        cache: EdgeCache::new(values.len(), m),
-        volume: 0.0,
-        moment: Vector::ZERO,
-        normal: Vector::ZERO,
-        area: 0.0,
-        lo: Vector::splat(Real::INFINITY),
-        hi: Vector::splat(Real::NEG_INFINITY),
-    };
+    let mut cutter = Cutter { pair, cache: EdgeCache::new(values.len(), m) };
+    let inf = Vector::splat(Real::INFINITY);
+    let mut it = Sums { volume: 0.0, moment: Vector::ZERO, normal: Vector::ZERO, area: 0.0, lo: inf, hi: -inf };
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
@@ -290,7 +279,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
                     continue;
                 }
                 for tet in TETS {
-                    it.tet(tet.map(|c| corners[c]));
+                    cutter.tet(&tet.map(|c| corners[c]), &mut it);
                 }
             }
         }

@@ -5,3 +5,5 @@ pub mod hertz;
 pub mod cylinder_impact;
 #[cfg(feature = "rapier")]
 pub mod stability;
+#[cfg(feature = "rapier")]
+pub mod drop_in;
