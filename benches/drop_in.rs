@@ -3,9 +3,7 @@
 //! contact and, for scale, with rapier's own contacts. Iterations advance the scene.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
-use discrete_contact::validation::drop_in::bin_scene;
-use discrete_contact::{Friction, IntegrationMode, Material, OverlapSettings};
+use discrete_contact::validation::drop_in::{self, bin_scene};
 
 const BODIES: usize = 108;
 const WARM_STEPS: usize = 48;
@@ -21,13 +19,8 @@ fn bench(c: &mut Criterion) {
     group.bench_function("rapier_contacts", |b| b.iter(|| scene.world.step()));
 
     let mut scene = bin_scene(BODIES);
-    let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
-        .unwrap()
-        .with_friction(Friction::new(0.5, 0.4, 0.01).unwrap())
-        .with_substeps_per_contact(6.0)
-        .unwrap()
-        .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
-    contacts.handle_all(&mut scene.world, Material::new(5e6, 0.4).unwrap()).unwrap();
+    let mut contacts = drop_in::discrete_contacts(4, 6.0).unwrap();
+    contacts.handle_all(&mut scene.world, drop_in::rubber().unwrap()).unwrap();
     for _ in 0..WARM_STEPS {
         contacts.step(&mut scene.world).unwrap();
     }

@@ -12,9 +12,7 @@ mod common;
 
 use std::time::Instant;
 
-use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
-use discrete_contact::validation::drop_in::{bin_scene, kinetic_energy, BinScene, BODY_RADIUS};
-use discrete_contact::{Friction, IntegrationMode, Material, OverlapSettings};
+use discrete_contact::validation::drop_in::{self, bin_scene, kinetic_energy, BinScene, BODY_RADIUS};
 
 /// Reporting interval (s of simulated time).
 const REPORT_EVERY: f64 = 0.1;
@@ -61,14 +59,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rapier_wall = start.elapsed().as_secs_f64();
     let rapier_ke = kinetic_energy(&world);
 
-    // 2. The same scene with the discrete contact: these lines are the drop-in.
+    // 2. The same scene with the discrete contact: these lines are the drop-in (the settings,
+    //    rubber E = 5 MPa, e = 0.5, friction 0.5/0.4, are in `validation::drop_in`).
     let BinScene { mut world, .. } = bin_scene(n);
-    let rubber = Material::new(5e6, 0.4)?;
-    let mut contacts = DiscreteContacts::new(OverlapSettings::new(n_c, IntegrationMode::Subcell)?, 0.5)?
-        .with_friction(Friction::new(0.5, 0.4, 0.01)?)
-        .with_substeps_per_contact(per_contact)?
-        .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
-    let handled = contacts.handle_all(&mut world, rubber)?;
+    let mut contacts = drop_in::discrete_contacts(n_c, per_contact)?;
+    let handled = contacts.handle_all(&mut world, drop_in::rubber()?)?;
     // (then `contacts.step(&mut world)?` where the loop had `world.step()`)
 
     println!("\ndiscrete contacts ({handled} colliders handled, sub-cell N_c = {n_c}, rubber E = 5 MPa, e = 0.5, μ = 0.5/0.4, {per_contact} sub-steps per contact time):");

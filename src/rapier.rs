@@ -316,16 +316,13 @@ impl DiscreteContacts {
         #[cfg(not(feature = "parallel"))]
         let evaluated: Vec<Result<Option<Evaluated>>> = pairs.iter().map(evaluate).collect();
 
+        // Each body's sum runs in the candidates' order, whichever thread evaluated them.
         let mut alive = HashMap::with_capacity(self.states.len());
-        let mut added: Vec<(RigidBodyHandle, Vector, Vector)> = Vec::new();
-        let mut slot: HashMap<RigidBodyHandle, usize> = HashMap::new();
+        let mut added: HashMap<RigidBodyHandle, (Vector, Vector)> = HashMap::new();
         let mut add = |h: RigidBodyHandle, f: Vector, t: Vector| {
-            let i = *slot.entry(h).or_insert_with(|| {
-                added.push((h, Vector::ZERO, Vector::ZERO));
-                added.len() - 1
-            });
-            added[i].1 += f;
-            added[i].2 += t;
+            let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
+            e.0 += f;
+            e.1 += t;
         };
         for e in evaluated {
             let Some(Evaluated { pair, bodies, out, state }) = e? else { continue };
@@ -341,7 +338,7 @@ impl DiscreteContacts {
         }
         self.states = alive;
         let mut applied = Vec::with_capacity(added.len());
-        for (h, f, t) in added {
+        for (h, (f, t)) in added {
             if let Some(rb) = world.bodies.get_mut(h) {
                 if rb.is_dynamic() {
                     rb.add_force(f, true);

@@ -19,8 +19,9 @@ impl Lcg {
     }
 }
 
-fn parry_shapes() -> Vec<(&'static str, Box<dyn Shape>)> {
-    let hull = ConvexPolyhedron::from_convex_hull(&[
+/// An irregular convex polyhedron of six vertices.
+fn test_hull() -> ConvexPolyhedron {
+    ConvexPolyhedron::from_convex_hull(&[
         Vector::new(0.3, 0.0, 0.0),
         Vector::new(-0.2, 0.25, 0.1),
         Vector::new(-0.1, -0.2, 0.3),
@@ -28,7 +29,11 @@ fn parry_shapes() -> Vec<(&'static str, Box<dyn Shape>)> {
         Vector::new(0.1, 0.3, 0.2),
         Vector::new(-0.25, -0.1, -0.2),
     ])
-    .unwrap();
+    .unwrap()
+}
+
+fn parry_shapes() -> Vec<(&'static str, Box<dyn Shape>)> {
+    let hull = test_hull();
     vec![
         ("ball", Box::new(Ball::new(0.3))),
         ("cuboid", Box::new(Cuboid::new(Vector::new(0.3, 0.2, 0.1)))),
@@ -139,15 +144,7 @@ fn non_convex_parry_shapes_are_refused() {
 #[test]
 fn distances_match_brute_force_over_the_surface() {
     use discrete_contact::parry3d_f64::shape::Triangle;
-    let hull = ConvexPolyhedron::from_convex_hull(&[
-        Vector::new(0.3, 0.0, 0.0),
-        Vector::new(-0.2, 0.25, 0.1),
-        Vector::new(-0.1, -0.2, 0.3),
-        Vector::new(0.0, 0.1, -0.35),
-        Vector::new(0.1, 0.3, 0.2),
-        Vector::new(-0.25, -0.1, -0.2),
-    ])
-    .unwrap();
+    let hull = test_hull();
     let cuboid = Cuboid::new(Vector::new(0.3, 0.2, 0.1));
     let cylinder = Cylinder::new(0.25, 0.15);
     let cases: Vec<(&str, &dyn Shape, (Vec<Vector>, Vec<[u32; 3]>), f64)> = vec![

@@ -276,6 +276,11 @@ impl Grid {
         Aabb::new(self.lo, self.lo + self.h * self.n as Real)
     }
 
+    /// The same spacing with one more cell on every side.
+    fn padded(&self) -> Self {
+        Self { lo: self.lo - self.h, h: self.h, n: self.n + 2 }
+    }
+
     /// Node values `(d_A, d_B)` on all `(n+1)^3` nodes, x fastest.
     fn sample<A: Sdf + ?Sized, B: Sdf + ?Sized>(&self, pair: &Pair<'_, A, B>) -> Vec<(Real, Real)> {
         let m = self.n + 1;
@@ -516,7 +521,7 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         IntegrationMode::Count => {
             // One more node layer around the box: the surface layer of the paper's normal lies
             // outside the overlap, also where the overlap fills the box up to a face.
-            let outer = Grid { lo: grid.lo - grid.h, h: grid.h, n: n + 2 };
+            let outer = grid.padded();
             count::integrate(pair, &outer, &outer.sample(pair))
         }
         IntegrationMode::Subcell => {
@@ -535,7 +540,7 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 /// the padding's outer node layer (it moved by more than a cell): then the search runs.
 fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, previous: &Aabb, rough: &Aabb, n: usize) -> Option<OverlapGeometry> {
     let inner = Grid::on(&intersect(previous, rough)?, n)?;
-    let grid = Grid { lo: inner.lo - inner.h, h: inner.h, n: n + 2 };
+    let grid = inner.padded();
     let values = grid.sample(pair);
     let m = n + 3;
     let on_boundary = |i: usize| i == 0 || i == m - 1;

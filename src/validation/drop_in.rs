@@ -6,7 +6,11 @@
 
 use rapier3d_f64::prelude::*;
 
+use crate::error::Result;
+use crate::material::{Friction, Material};
 use crate::math::{Real, Vector};
+use crate::overlap::{IntegrationMode, OverlapSettings};
+use crate::rapier::{DiscreteContacts, StepPolicy};
 
 /// Size of the bodies (m): spheres of this radius; the other shapes have similar volume.
 pub const BODY_RADIUS: Real = 0.01;
@@ -16,6 +20,25 @@ pub const DENSITY: Real = 1000.0;
 pub const RAPIER_FRICTION: Real = 0.4;
 /// Restitution of rapier's own contacts.
 pub const RAPIER_RESTITUTION: Real = 0.5;
+
+/// Restitution of the discrete contacts.
+pub const RESTITUTION: Real = 0.5;
+
+/// The bodies' material for the discrete contacts: a rubber, E = 5 MPa, ν = 0.4.
+pub fn rubber() -> Result<Material> {
+    Material::new(5e6, 0.4)
+}
+
+/// The discrete contact the example and the benchmark add to the scene: sub-cell integration
+/// at `n_c`, restitution [`RESTITUTION`], friction μ_s = 0.5, μ_k = 0.4 (v_s = 1 cm/s),
+/// `substeps_per_contact` sub-steps per Hertz contact time, automatic sub-stepping. Hand it
+/// the colliders with `handle_all(&mut world, rubber()?)`.
+pub fn discrete_contacts(n_c: usize, substeps_per_contact: Real) -> Result<DiscreteContacts> {
+    Ok(DiscreteContacts::new(OverlapSettings::new(n_c, IntegrationMode::Subcell)?, RESTITUTION)?
+        .with_friction(Friction::new(0.5, 0.4, 0.01)?)
+        .with_substeps_per_contact(substeps_per_contact)?
+        .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 }))
+}
 
 /// The scene and the handles a report needs.
 pub struct BinScene {
@@ -42,17 +65,17 @@ pub fn bin_scene(n: usize) -> BinScene {
 
     // The bin: floor and four walls on one fixed body.
     let bin = world.insert_body(RigidBodyBuilder::fixed());
-    let friction = |c: ColliderBuilder| c.friction(RAPIER_FRICTION).restitution(RAPIER_RESTITUTION);
-    world.insert_collider(friction(ColliderBuilder::new(SharedShape::halfspace(Vector::Y))), Some(bin));
+    let rapier_material = |c: ColliderBuilder| c.friction(RAPIER_FRICTION).restitution(RAPIER_RESTITUTION);
+    world.insert_collider(rapier_material(ColliderBuilder::new(SharedShape::halfspace(Vector::Y))), Some(bin));
     let (t, h) = (0.01, 0.3);
     for (x, z, hx, hz) in [(half_width + t, 0.0, t, half_width + 2.0 * t), (-half_width - t, 0.0, t, half_width + 2.0 * t), (0.0, half_width + t, half_width, t), (0.0, -half_width - t, half_width, t)] {
-        world.insert_collider(friction(ColliderBuilder::cuboid(hx, h, hz)).translation(Vector::new(x, h, z)), Some(bin));
+        world.insert_collider(rapier_material(ColliderBuilder::cuboid(hx, h, hz)).translation(Vector::new(x, h, z)), Some(bin));
     }
 
     // The see-saw: a plank hinged about z at its middle, above the floor.
     let pivot = Vector::new(0.0, 0.025, 0.0);
     let plank = world.insert_body(RigidBodyBuilder::dynamic().translation(pivot));
-    world.insert_collider(friction(ColliderBuilder::cuboid(0.6 * half_width, 0.004, 0.4 * half_width)).density(DENSITY), Some(plank));
+    world.insert_collider(rapier_material(ColliderBuilder::cuboid(0.6 * half_width, 0.004, 0.4 * half_width)).density(DENSITY), Some(plank));
     let anchor = world.insert_body(RigidBodyBuilder::fixed().translation(pivot));
     world.insert_impulse_joint(anchor, plank, RevoluteJointBuilder::new(Vector::Z));
 
@@ -91,7 +114,7 @@ pub fn bin_scene(n: usize) -> BinScene {
                 ColliderBuilder::convex_hull(&points).unwrap_or_else(|| ColliderBuilder::ball(r))
             }
         };
-        world.insert_collider(friction(collider).density(DENSITY), Some(body));
+        world.insert_collider(rapier_material(collider).density(DENSITY), Some(body));
         bodies.push(body);
     }
     BinScene { world, bodies, plank, half_width }
