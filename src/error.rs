@@ -69,6 +69,11 @@ pub enum Error {
         /// The largest indentation accepted (m).
         limit: Real,
     },
+    /// (feature `fluid`) The lattice refused a parameter, blew up (with the step and the node),
+    /// or could not write a file.
+    #[cfg(feature = "fluid")]
+    #[error("fluid: {0}")]
+    Fluid(#[from] hlbm::Error),
 }
 
 /// `Result` with this crate's [`Error`].

@@ -30,8 +30,9 @@
 //! - `rapier` (default): the drop-in for rapier3d-f64 scenes ([`rapier`] module).
 //! - `parallel` (default): a step's contacts are evaluated on all cores (rayon); forces are
 //!   summed in a fixed order, so results do not depend on the thread count.
-//! - `fluid`: re-exports the bundled lattice Boltzmann crate `hlbm` for wet runs; a dry build
-//!   never compiles it.
+//! - `fluid`: wet runs — the [`coupling`] module (rapier bodies four-way coupled with the
+//!   bundled HLBM lattice crate, re-exported as [`hlbm`]); implies `rapier`. A dry build never
+//!   compiles the lattice.
 //!
 //! ## Errors
 //! Every fallible call returns [`Error`]; its variants are the catalogue:
@@ -51,10 +52,15 @@
 //! - [`Error::ContactTooSoft`] — (rapier drop-in) Hertz puts an impact's indentation beyond half
 //!   the smaller body: the bodies would pass through each other. Use a stiffer material or a
 //!   lower speed.
+//! - `Error::Fluid` — (feature `fluid`) the lattice refused a parameter (e.g. `τ <= 1/2`: raise
+//!   `Δt` or `ν`, or lower `Δx`), blew up (the message names the step and the node: lower the
+//!   lattice velocity with a smaller `Δt`, or raise `τ`), or could not write a file.
 
 #![warn(missing_docs)]
 
 pub mod contact;
+#[cfg(feature = "fluid")]
+pub mod coupling;
 pub mod error;
 pub mod force;
 pub mod material;

@@ -7,3 +7,5 @@ pub mod cylinder_impact;
 pub mod stability;
 #[cfg(feature = "rapier")]
 pub mod drop_in;
+#[cfg(feature = "fluid")]
+pub mod wet_rebound;
