@@ -17,11 +17,6 @@ use discrete_contact::validation::drop_in::{self, bin_scene, kinetic_energy, Bin
 /// Reporting interval (s of simulated time).
 const REPORT_EVERY: f64 = 0.1;
 
-fn arg(name: &str, default: f64) -> f64 {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).and_then(|v| v.parse().ok()).unwrap_or(default)
-}
-
 /// Largest penetration among rapier's own contact points (m).
 fn rapier_penetration(world: &discrete_contact::rapier3d_f64::prelude::PhysicsWorld) -> f64 {
     world
@@ -34,10 +29,11 @@ fn rapier_penetration(world: &discrete_contact::rapier3d_f64::prelude::PhysicsWo
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let n = arg("--bodies", 180.0) as usize;
-    let seconds = arg("--seconds", 1.0);
-    let per_contact = arg("--per-contact", 6.0);
-    let n_c = arg("--nc", 4.0) as usize;
+    let args = common::Args::from_env();
+    let n = args.number("--bodies", 180.0) as usize;
+    let seconds = args.number("--seconds", 1.0);
+    let per_contact = args.number("--per-contact", 6.0);
+    let n_c = args.number("--nc", 4.0) as usize;
 
     // 1. The scene with rapier's own contacts.
     let BinScene { mut world, .. } = bin_scene(n);

@@ -26,26 +26,6 @@ use discrete_contact::math::Vector;
 use discrete_contact::validation::wet_rebound::{run, Trajectory, WetRebound};
 use plotters::prelude::*;
 
-/// Command-line options: `--name value` pairs and flags.
-struct Args(Vec<String>);
-
-impl Args {
-    fn flag(&self, name: &str) -> bool {
-        self.0.iter().any(|a| a == name)
-    }
-    fn value(&self, name: &str) -> Option<&str> {
-        self.0.iter().position(|a| a == name).and_then(|i| self.0.get(i + 1)).map(String::as_str)
-    }
-    fn number(&self, name: &str, default: f64) -> f64 {
-        self.value(name).map(|v| v.parse().unwrap_or_else(|_| panic!("{name}: not a number: {v}"))).unwrap_or(default)
-    }
-    fn list(&self, name: &str, default: &[f64]) -> Vec<f64> {
-        self.value(name)
-            .map(|v| v.split(',').map(|x| x.trim().parse().unwrap_or_else(|_| panic!("{name}: not a number list: {v}"))).collect())
-            .unwrap_or_else(|| default.to_vec())
-    }
-}
-
 /// One finished run.
 struct Run {
     h0: f64,
@@ -56,7 +36,7 @@ struct Run {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args(std::env::args().collect());
+    let args = common::Args::from_env();
     let quick = args.flag("--quick");
     let dxs = args.list("--dx", if quick { &[1.0, 0.75] } else { &[0.6, 0.3] });
     let h0s = args.list("--h0", &[5.5, 19.6, 35.7]);

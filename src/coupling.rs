@@ -173,8 +173,9 @@ impl Fluid {
         let corrections = self.map_bodies(world, &mut report)?;
         let lattice = self.lattice.step()?;
         report.max_fluid_speed = self.units.velocity_to_physical(lattice.max_velocity);
-        let g = world.gravity;
-        let rho = self.units.density();
+        // Hydrodynamic force plus buoyancy −ρ_f V g, held on each body over the step.
+        let buoyancy = -self.units.density() * world.gravity;
+        let mut applied = Vec::with_capacity(self.bodies.len());
         for (id, (b, (cf, cm))) in self.bodies.iter_mut().zip(corrections).enumerate() {
             let pf = lattice.particle_forces.get(&(id as u32)).copied().unwrap_or_default();
             let centre = (b.previous.2 - self.origin) / self.units.dx();
@@ -182,9 +183,12 @@ impl Fluid {
             let m = Vector::from(pf.moment) - centre.cross(Vector::from(pf.force)) + cm;
             b.force = f * self.units.force_to_physical(1.0);
             b.torque = m * self.units.torque_to_physical(1.0);
-            let rb = &mut world.bodies[b.body];
-            rb.add_force(b.force - rho * b.volume * g, true);
-            rb.add_torque(b.torque, true);
+            if let Some(rb) = world.bodies.get_mut(b.body) {
+                let total = b.force + b.volume * buoyancy;
+                rb.add_force(total, true);
+                rb.add_torque(b.torque, true);
+                applied.push((b.body, total, b.torque));
+            }
         }
         world.integration_parameters.dt = self.units.dt();
         let result = match contacts {
@@ -194,12 +198,7 @@ impl Fluid {
                 Ok(None)
             }
         };
-        for b in &self.bodies {
-            if let Some(rb) = world.bodies.get_mut(b.body) {
-                rb.add_force(-(b.force - rho * b.volume * g), false);
-                rb.add_torque(-b.torque, false);
-            }
-        }
+        crate::rapier::take_back(world, &applied);
         report.contacts = result?;
         Ok(report)
     }

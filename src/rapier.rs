@@ -103,6 +103,17 @@ pub struct StepStats {
     pub max_indentation: Real,
 }
 
+/// Rapier keeps user forces across steps: takes back out forces and torques this crate added
+/// for one step, leaving the user's own.
+pub(crate) fn take_back(world: &mut PhysicsWorld, applied: &[(RigidBodyHandle, Vector, Vector)]) {
+    for &(h, f, t) in applied {
+        if let Some(rb) = world.bodies.get_mut(h) {
+            rb.add_force(-f, false);
+            rb.add_torque(-t, false);
+        }
+    }
+}
+
 /// The discrete contact model applied to a rapier world.
 pub struct DiscreteContacts {
     settings: OverlapSettings,
@@ -247,13 +258,7 @@ impl DiscreteContacts {
                 }
             };
             world.step_with_events(&Hooks { handled: &self.handled, user: hooks }, events);
-            // Rapier keeps user forces: take ours back out, leave the user's.
-            for (h, f, t) in applied {
-                if let Some(rb) = world.bodies.get_mut(h) {
-                    rb.add_force(-f, false);
-                    rb.add_torque(-t, false);
-                }
-            }
+            take_back(world, &applied);
         }
         world.integration_parameters.dt = saved.0;
         world.integration_parameters.num_solver_iterations = saved.1;

@@ -8,23 +8,7 @@ use discrete_contact::coupling::{Fluid, FluidSettings};
 use discrete_contact::math::{Real, Vector};
 use discrete_contact::rapier3d_f64::prelude::*;
 use discrete_contact::validation::wet_rebound::{run, Trajectory, WetRebound};
-
-/// Schiller–Naumann terminal velocity of a sphere of diameter `d`, density ratio `r`.
-fn schiller_naumann(d: Real, nu: Real, r: Real, g: Real) -> Real {
-    let mut u = (r - 1.0) * g * d * d / (18.0 * nu);
-    for _ in 0..200 {
-        let re = u * d / nu;
-        let cd = 24.0 / re * (1.0 + 0.15 * re.powf(0.687));
-        u = 0.5 * u + 0.5 * ((r - 1.0) * g * d * 4.0 / (3.0 * cd)).sqrt();
-    }
-    u
-}
-
-/// Di Felice (1996) wall factor for diameter ratio `lambda` = D / W.
-fn wall_factor(lambda: Real, re: Real) -> Real {
-    let alpha = (3.3 + 0.085 * re) / (1.0 + 0.1 * re);
-    ((1.0 - lambda) / (1.0 - 0.33 * lambda)).powf(alpha)
-}
+use discrete_contact::hlbm::correlations::{di_felice_wall_factor, schiller_naumann_terminal_velocity};
 
 #[test]
 fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {
@@ -51,9 +35,9 @@ fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {
     let tail = &speeds[3 * speeds.len() / 4..];
     let u = tail.iter().cloned().fold(0.0, Real::max);
     let drift = (tail[tail.len() - 1] - tail[0]).abs() / u;
-    let u_inf = schiller_naumann(d, nu, ratio, 9.81);
+    let u_inf = schiller_naumann_terminal_velocity(d, nu, ratio, 9.81);
     let re = u * d / nu;
-    let expected = u_inf * wall_factor(d / w, re);
+    let expected = u_inf * di_felice_wall_factor(d / w, re);
     let err = u / expected - 1.0;
     println!("U = {u:.5} m/s, Re = {re:.2}, Schiller–Naumann {u_inf:.5}, with walls {expected:.5}: {:+.1} % (drift {:.1} %), {} steps", err * 100.0, drift * 100.0, speeds.len());
     assert!(drift < 0.03, "not terminal: drift {drift}");

@@ -1,4 +1,5 @@
-//! Helpers shared by the validation examples: output folder, CSV writing, timing, fonts.
+//! Helpers shared by the validation examples: command-line options, output folder, CSV
+//! writing, timing, fonts.
 #![allow(dead_code)]
 
 use std::fs;
@@ -57,4 +58,33 @@ pub fn eoc(n: &[f64], err: &[f64]) -> f64 {
     let (mx, my) = (sx / m, sy / m);
     let (num, den) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + (p.0 - mx) * (p.1 - my), a.1 + (p.0 - mx).powi(2)));
     -num / den
+}
+
+/// Command-line options: `--name value` pairs and flags.
+pub struct Args(Vec<String>);
+
+impl Args {
+    /// The process's arguments.
+    pub fn from_env() -> Self {
+        Self(std::env::args().collect())
+    }
+
+    /// Whether `name` was given.
+    pub fn flag(&self, name: &str) -> bool {
+        self.0.iter().any(|a| a == name)
+    }
+    /// The word after `name`.
+    pub fn value(&self, name: &str) -> Option<&str> {
+        self.0.iter().position(|a| a == name).and_then(|i| self.0.get(i + 1)).map(String::as_str)
+    }
+    /// The number after `name` (a clear panic when it is not one), or `default`.
+    pub fn number(&self, name: &str, default: f64) -> f64 {
+        self.value(name).map(|v| v.parse().unwrap_or_else(|_| panic!("{name}: not a number: {v}"))).unwrap_or(default)
+    }
+    /// The comma-separated numbers after `name`, or `default`.
+    pub fn list(&self, name: &str, default: &[f64]) -> Vec<f64> {
+        self.value(name)
+            .map(|v| v.split(',').map(|x| x.trim().parse().unwrap_or_else(|_| panic!("{name}: not a number list: {v}"))).collect())
+            .unwrap_or_else(|| default.to_vec())
+    }
 }

@@ -19,6 +19,7 @@
 
 #![warn(missing_docs)]
 
+pub mod correlations;
 pub mod d3q19;
 pub mod error;
 pub mod lattice;

@@ -6,25 +6,7 @@
 //! explicitly with the hydrodynamic force of the lattice and the net weight (ρ_p - ρ_f) V g.
 
 use hlbm::{solid_fraction, Lattice};
-
-/// Schiller–Naumann terminal velocity for `D`, `ν`, density ratio `r`, gravity `g`.
-fn schiller_naumann(d: f64, nu: f64, r: f64, g: f64) -> f64 {
-    // Solve (r - 1) g = 3/4 C_D(Re) U² / D by fixed-point iteration on U.
-    let mut u = (r - 1.0) * g * d * d / (18.0 * nu);
-    for _ in 0..200 {
-        let re = u * d / nu;
-        let cd = 24.0 / re * (1.0 + 0.15 * re.powf(0.687));
-        u = 0.5 * u + 0.5 * ((r - 1.0) * g * d * 4.0 / (3.0 * cd)).sqrt();
-    }
-    u
-}
-
-/// Di Felice (1996): `U/U∞ = ((1 - λ)/(1 - 0.33 λ))^α`, `α = (3.3 + 0.085 Re)/(1 + 0.1 Re)`,
-/// `λ = D / W`.
-fn wall_factor(lambda: f64, re: f64) -> f64 {
-    let alpha = (3.3 + 0.085 * re) / (1.0 + 0.1 * re);
-    ((1.0 - lambda) / (1.0 - 0.33 * lambda)).powf(alpha)
-}
+use hlbm::correlations::{di_felice_wall_factor, schiller_naumann_terminal_velocity};
 
 #[test]
 fn sphere_reaches_the_schiller_naumann_terminal_velocity() {
@@ -67,9 +49,9 @@ fn sphere_reaches_the_schiller_naumann_terminal_velocity() {
     let tail = &history[history.len() - 300..];
     let u = -tail.iter().sum::<f64>() / tail.len() as f64;
     let drift = (tail[tail.len() - 1] - tail[0]).abs() / u;
-    let u_inf = schiller_naumann(d, nu, ratio, g);
+    let u_inf = schiller_naumann_terminal_velocity(d, nu, ratio, g);
     let re = u * d / nu;
-    let expected = u_inf * wall_factor(d / nx as f64, re);
+    let expected = u_inf * di_felice_wall_factor(d / nx as f64, re);
     let err = u / expected - 1.0;
     println!("U = {u:.5}, Re = {re:.1}, Schiller–Naumann {u_inf:.5}, with walls {expected:.5}, error {:.2} %, drift {:.2} %", err * 100.0, drift * 100.0);
     assert!(drift < 0.02, "not terminal yet: drift {drift}");

@@ -1,0 +1,24 @@
+//! Drag correlations for a settling sphere, the references the settling tests (and the
+//! coupling's) compare with.
+
+/// Terminal velocity (any consistent units) of a sphere of diameter `d` and density ratio
+/// `ratio = ρ_p/ρ_f > 1` in a fluid of kinematic viscosity `nu` under gravity `g`, from the
+/// Schiller–Naumann drag law `C_D = 24/Re (1 + 0.15 Re^0.687)` (Re < 1000): the balance
+/// `(ratio − 1) g = 3/4 C_D(Re) U² / d`, solved by damped fixed-point iteration from the Stokes
+/// velocity.
+pub fn schiller_naumann_terminal_velocity(d: f64, nu: f64, ratio: f64, g: f64) -> f64 {
+    let mut u = (ratio - 1.0) * g * d * d / (18.0 * nu);
+    for _ in 0..200 {
+        let re = u * d / nu;
+        let cd = 24.0 / re * (1.0 + 0.15 * re.powf(0.687));
+        u = 0.5 * u + 0.5 * ((ratio - 1.0) * g * d * 4.0 / (3.0 * cd)).sqrt();
+    }
+    u
+}
+
+/// Di Felice (1996): terminal velocity in a tube or box of width `W` over the unbounded one,
+/// `((1 − λ)/(1 − 0.33 λ))^α` with `λ = d / W` and `α = (3.3 + 0.085 Re)/(1 + 0.1 Re)`.
+pub fn di_felice_wall_factor(lambda: f64, re: f64) -> f64 {
+    let alpha = (3.3 + 0.085 * re) / (1.0 + 0.1 * re);
+    ((1.0 - lambda) / (1.0 - 0.33 * lambda)).powf(alpha)
+}
