@@ -27,7 +27,7 @@ fn covered(lat: &mut Lattice) {
     for z in 0..nz {
         for y in 0..ny {
             for x in (0..nx).step_by(5) {
-                lat.particles.add(x, y, z, 0.5, [1e-3, 0.0, 0.0], (x / 20) as u32);
+                lat.particles.add(x, y, z, 0.5, [1e-3, 0.0, 0.0], [0.0; 3], (x / 20) as u32);
             }
         }
     }

@@ -40,11 +40,12 @@
 //! # Ok::<(), discrete_contact::Error>(())
 //! ```
 
-use hlbm::{solid_fraction, Lattice, UnitConverter};
+use hlbm::{solid_fraction, Lattice, ParticleNode, UnitConverter};
 use rapier3d_f64::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
 
 use crate::error::{check_positive, Error, Result};
 use crate::math::{Real, Vector};
+use crate::periodic::PeriodicBox;
 use crate::rapier::{DiscreteContacts, StepStats};
 use crate::shape::{ConvexShape, Sdf};
 
@@ -91,6 +92,20 @@ struct Coupled {
     torque: Vector,
 }
 
+/// A body as one mapping sees it.
+struct Placed<'a> {
+    id: usize,
+    shape: &'a ConvexShape,
+    inverse: crate::math::Pose,
+    com: Vector,
+    v: Vector,
+    w: Vector,
+    /// Velocities and centre the inner fluid was forced to last step.
+    previous: (Vector, Vector, Vector),
+    /// Node index ranges (unwrapped across periodic faces).
+    ranges: [(i64, i64); 3],
+}
+
 /// What one fluid step did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FluidStepReport {
@@ -103,6 +118,20 @@ pub struct FluidStepReport {
     /// Set when a body moves faster than the lattice's Mach limit allows (the message says by
     /// how much and what to change).
     pub mach_warning: Option<String>,
+    /// Wall-clock seconds spent writing the bodies onto the lattice, in the lattice step, and
+    /// in the bodies' step (rapier, contacts and their sub-steps).
+    pub seconds: StepSeconds,
+}
+
+/// Where one fluid step's wall-clock time went (s).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepSeconds {
+    /// Writing bodies onto the lattice (`d_B`, node velocities).
+    pub mapping: Real,
+    /// The lattice step (collision, streaming, forcing, momentum exchange).
+    pub lattice: Real,
+    /// Rapier's step with the contacts (candidates, overlap, forces, sub-steps).
+    pub bodies: Real,
 }
 
 /// A lattice Boltzmann fluid filling a box, coupled to bodies of a rapier world.
@@ -112,7 +141,8 @@ pub struct Fluid {
     smoothing: Real,
     /// Physical position of node (0, 0, 0).
     origin: Vector,
-    periodic: [bool; 3],
+    /// The fluid's box, rounded to whole cells, with its periodic axes.
+    domain: PeriodicBox,
     bodies: Vec<Coupled>,
 }
 
@@ -133,16 +163,19 @@ impl Fluid {
         let size = max - min;
         let mut dims = [0usize; 3];
         let mut origin = Vector::ZERO;
+        let mut rounded = max;
         for d in 0..3 {
             check_positive("fluid box size (max - min)", size[d])?;
             let cells = (size[d] / dx).round().max(1.0) as usize;
+            rounded[d] = min[d] + cells as Real * dx;
             // Periodic: cell centres at min + (i + 1/2) dx. Walled: solid layers 0 and n - 1,
             // the halfway walls half a cell inside them, on the box faces.
             (dims[d], origin[d]) = if periodic[d] { (cells, min[d] + 0.5 * dx) } else { (cells + 2, min[d] - 0.5 * dx) };
         }
         let mut lattice = Lattice::new(dims[0], dims[1], dims[2], settings.units.tau())?;
         lattice.close_faces(periodic);
-        Ok(Self { lattice, units: settings.units, smoothing: settings.smoothing, origin, periodic, bodies: Vec::new() })
+        let domain = PeriodicBox::new(min, rounded, periodic)?;
+        Ok(Self { lattice, units: settings.units, smoothing: settings.smoothing, origin, domain, bodies: Vec::new() })
     }
 
     /// Couples the body of `collider` (a dynamic body with a bounded convex shape) to the fluid.
@@ -169,18 +202,29 @@ impl Fluid {
     /// Fails with the lattice's [`hlbm::Error::Unstable`] (step and node) when the fluid blows
     /// up, and with the contacts' errors.
     pub fn step(&mut self, world: &mut PhysicsWorld, contacts: Option<&mut DiscreteContacts>) -> Result<FluidStepReport> {
+        if let Some(c) = &contacts {
+            if c.periodic() != self.periodic_box().as_ref() {
+                return Err(Error::InvalidParameter {
+                    name: "periodic box of the contacts",
+                    value: Real::NAN,
+                    allowed: "the fluid's own: DiscreteContacts::with_periodic(fluid.periodic_box()) when the fluid is periodic, none when it is not",
+                });
+            }
+        }
         let mut report = FluidStepReport::default();
+        let clock = std::time::Instant::now();
         let corrections = self.map_bodies(world, &mut report)?;
+        report.seconds.mapping = clock.elapsed().as_secs_f64();
         let lattice = self.lattice.step()?;
+        report.seconds.lattice = clock.elapsed().as_secs_f64() - report.seconds.mapping;
         report.max_fluid_speed = self.units.velocity_to_physical(lattice.max_velocity);
         // Hydrodynamic force plus buoyancy −ρ_f V g, held on each body over the step.
         let buoyancy = -self.units.density() * world.gravity;
         let mut applied = Vec::with_capacity(self.bodies.len());
         for (id, (b, (cf, cm))) in self.bodies.iter_mut().zip(corrections).enumerate() {
             let pf = lattice.particle_forces.get(&(id as u32)).copied().unwrap_or_default();
-            let centre = (b.previous.2 - self.origin) / self.units.dx();
             let f = Vector::from(pf.force) + cf;
-            let m = Vector::from(pf.moment) - centre.cross(Vector::from(pf.force)) + cm;
+            let m = Vector::from(pf.moment) + cm;
             b.force = f * self.units.force_to_physical(1.0);
             b.torque = m * self.units.torque_to_physical(1.0);
             if let Some(rb) = world.bodies.get_mut(b.body) {
@@ -199,68 +243,127 @@ impl Fluid {
             }
         };
         crate::rapier::take_back(world, &applied);
+        report.seconds.bodies = clock.elapsed().as_secs_f64() - report.seconds.mapping - report.seconds.lattice;
         report.contacts = result?;
         Ok(report)
     }
 
     /// Writes every coupled body onto the lattice; returns per body the inner-fluid correction
     /// (force, moment about the centre of mass; lattice units).
+    ///
+    /// Slab by slab on all cores: each z-slab evaluates the SDFs of the bodies that reach into
+    /// it; the corrections are summed per body in slab order (thread-count independent).
     fn map_bodies(&mut self, world: &PhysicsWorld, report: &mut FluidStepReport) -> Result<Vec<(Vector, Vector)>> {
         let dx = self.units.dx();
         let dims = self.lattice.dims();
         let to_lattice = self.units.velocity_to_lattice(1.0);
         let half = 0.5 * self.smoothing;
-        self.lattice.particles.clear();
-        let mut corrections = Vec::with_capacity(self.bodies.len());
+        let periodic = self.domain.periodic();
+        let mut placed = Vec::with_capacity(self.bodies.len());
         let mut fastest: Real = 0.0;
+        // Which bodies reach into each slab, and as which unwrapped layer k.
+        let mut by_slab: Vec<Vec<(usize, i64)>> = vec![Vec::new(); dims[2]];
         for (id, b) in self.bodies.iter_mut().enumerate() {
-            let (Some(rb), Some(co)) = (world.bodies.get(b.body), world.colliders.get(b.collider)) else {
-                corrections.push((Vector::ZERO, Vector::ZERO));
-                continue;
-            };
+            let (Some(rb), Some(co)) = (world.bodies.get(b.body), world.colliders.get(b.collider)) else { continue };
             let (pose, com, v, w) = (*co.position(), rb.center_of_mass(), rb.linvel(), rb.angvel());
             crate::error::check_finite_vec("coupled body velocity", v)?;
             crate::error::check_finite_vec("coupled body angular velocity", w)?;
-            let (v0, w0, c0) = b.previous;
             let aabb = co.compute_aabb();
             fastest = fastest.max(v.length() + w.length() * 0.5 * (aabb.maxs - aabb.mins).length());
             let range = |d: usize| -> (i64, i64) {
                 let lo = ((aabb.mins[d] - half - self.origin[d]) / dx).ceil() as i64;
                 let hi = ((aabb.maxs[d] + half - self.origin[d]) / dx).floor() as i64;
-                if self.periodic[d] {
+                if periodic[d] {
                     (lo, hi.min(lo + dims[d] as i64 - 1))
                 } else {
                     (lo.max(0), hi.min(dims[d] as i64 - 1))
                 }
             };
-            let (rx, ry, rz) = (range(0), range(1), range(2));
-            let wrap = |i: i64, d: usize| i.rem_euclid(dims[d] as i64) as usize;
-            let (mut cf, mut cm) = (Vector::ZERO, Vector::ZERO);
-            let inverse = pose.inverse();
-            for k in rz.0..=rz.1 {
-                for j in ry.0..=ry.1 {
-                    for i in rx.0..=rx.1 {
-                        let p = self.origin + Vector::new(i as Real, j as Real, k as Real) * dx;
-                        let d_b = solid_fraction(b.shape.distance(inverse * p), self.smoothing);
-                        let (x, y, z) = (wrap(i, 0), wrap(j, 1), wrap(k, 2));
-                        if d_b <= 0.0 || self.lattice.is_solid(self.lattice.index(x, y, z)) {
+            let ranges = [range(0), range(1), range(2)];
+            for k in ranges[2].0..=ranges[2].1 {
+                by_slab[k.rem_euclid(dims[2] as i64) as usize].push((placed.len(), k));
+            }
+            placed.push(Placed { id, shape: &b.shape, inverse: pose.inverse(), com, v, w, previous: b.previous, ranges });
+            b.previous = (v, w, com);
+        }
+        let mut field = std::mem::take(&mut self.lattice.particles);
+        let (origin, smoothing, lattice) = (self.origin, self.smoothing, &self.lattice);
+        let wrap = |i: i64, d: usize| i.rem_euclid(dims[d] as i64) as usize;
+        let partial = field.fill_slabs(|z, push| {
+            let mut sums: Vec<(usize, Vector, Vector)> = Vec::new();
+            for &(i, k) in &by_slab[z] {
+                let b = &placed[i];
+                let (v0, w0, c0) = b.previous;
+                let (mut cf, mut cm) = (Vector::ZERO, Vector::ZERO);
+                for j in b.ranges[1].0..=b.ranges[1].1 {
+                    let y = wrap(j, 1);
+                    for i in b.ranges[0].0..=b.ranges[0].1 {
+                        let p = origin + Vector::new(i as Real, j as Real, k as Real) * dx;
+                        let d_b = solid_fraction(b.shape.distance(b.inverse * p), smoothing);
+                        let x = wrap(i, 0);
+                        if d_b <= 0.0 || lattice.is_solid(lattice.index(x, y, z)) {
                             continue;
                         }
-                        let vel = (v + w.cross(p - com)) * to_lattice;
-                        self.lattice.particles.add(x, y, z, d_b, vel.to_array(), id as u32);
+                        let vel = (b.v + b.w.cross(p - b.com)) * to_lattice;
+                        let arm = (p - b.com) / dx;
+                        push(y, ParticleNode { x: x as u32, d_b, velocity: vel.to_array(), arm: arm.to_array(), id: b.id as u32 });
+                        // The inner fluid's momentum change, removed from the lattice's force.
                         let before = (v0 + w0.cross(p - c0)) * to_lattice;
                         let dm = (vel - before) * d_b;
                         cf += dm;
-                        cm += ((p - com) / dx).cross(dm);
+                        cm += arm.cross(dm);
                     }
                 }
+                sums.push((b.id, cf, cm));
             }
-            b.previous = (v, w, com);
-            corrections.push((cf, cm));
+            sums
+        });
+        self.lattice.particles = field;
+        let mut corrections = vec![(Vector::ZERO, Vector::ZERO); self.bodies.len()];
+        for (id, cf, cm) in partial.into_iter().flatten() {
+            corrections[id].0 += cf;
+            corrections[id].1 += cm;
         }
         report.particle_nodes = self.lattice.particles.len();
         report.mach_warning = self.units.mach_warning(fastest);
         Ok(corrections)
+    }
+
+    /// The fluid's box (rounded to whole cells) when it is periodic along some axis: give it
+    /// to [`DiscreteContacts::with_periodic`] so bodies and contacts wrap as the fluid does.
+    pub fn periodic_box(&self) -> Option<PeriodicBox> {
+        self.domain.is_periodic().then_some(self.domain)
+    }
+
+    /// Balances the suspension's weight: in a box periodic along gravity nothing holds the
+    /// bodies' net weight `W = Σ (m − ρ_f V) g`, and the whole suspension would accelerate. This
+    /// sets the fluid's body acceleration to `a = −W / (ρ_f V_box)` — a uniform pressure
+    /// gradient, whose share on the nodes inside bodies reaches the bodies through the
+    /// coupling — so the total momentum of fluid and bodies stays constant. Call it after
+    /// coupling the bodies; returns `a` (m/s²).
+    pub fn balance_weight(&mut self, world: &PhysicsWorld) -> Result<Vector> {
+        let rho = self.units.density();
+        let mut weight = Vector::ZERO;
+        for b in &self.bodies {
+            if let Some(co) = world.colliders.get(b.collider) {
+                weight += (co.mass() - rho * b.volume) * world.gravity;
+            }
+        }
+        let [nx, ny, nz] = self.lattice.dims();
+        let periodic = self.domain.periodic();
+        let fluid_cells = [nx, ny, nz].iter().zip(periodic).map(|(&n, p)| if p { n } else { n - 2 } as Real).product::<Real>();
+        let a = -weight / (rho * fluid_cells * self.units.dx().powi(3));
+        crate::error::check_finite_vec("balance acceleration", a)?;
+        self.lattice.set_body_acceleration(a.to_array().map(|c| self.units.acceleration_to_lattice(c)));
+        Ok(a)
+    }
+
+    /// Mass-weighted mean velocity of the lattice's fluid nodes (m/s), the nodes inside bodies
+    /// included (they move with the bodies). A sweep over the whole lattice: call it every few
+    /// steps, not every step.
+    pub fn mean_velocity(&self) -> Vector {
+        let (m, p) = self.lattice.totals();
+        Vector::from_array(p.map(|c| self.units.velocity_to_physical(c / m)))
     }
 
     /// Hydrodynamic force and torque (about the centre of mass) on the body of `collider` in

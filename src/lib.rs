@@ -65,6 +65,7 @@ pub mod error;
 pub mod force;
 pub mod material;
 pub mod overlap;
+pub mod periodic;
 #[cfg(feature = "rapier")]
 pub mod rapier;
 pub mod shape;

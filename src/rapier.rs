@@ -44,6 +44,7 @@ use crate::force::BodyKinematics;
 use crate::material::{effective_modulus, Friction, Material, PairParameters, StiffnessFactor};
 use crate::math::{Pose, Real, Vector};
 use crate::overlap::OverlapSettings;
+use crate::periodic::{overlapping_spheres, PeriodicBox, Sphere};
 use crate::shape::{ConvexShape, Sdf};
 
 /// What to do when the user's step cannot resolve a contact.
@@ -83,6 +84,10 @@ struct Handled {
     /// Smallest half-extent of the bounds (m), infinite for a half-space.
     half_size: Real,
 }
+
+/// A candidate pair and the shift that moves the second collider to its image nearest the
+/// first (zero without periodic axes).
+type Candidate = (ColliderHandle, ColliderHandle, Vector);
 
 /// One evaluated contact, before its forces are summed.
 struct Evaluated {
@@ -124,6 +129,7 @@ pub struct DiscreteContacts {
     substeps_per_contact: Real,
     handled: HashMap<ColliderHandle, Handled>,
     states: HashMap<(ColliderHandle, ColliderHandle), ContactState>,
+    periodic: Option<PeriodicBox>,
 }
 
 /// Wraps the user's hooks: handled pairs get no rapier contact response.
@@ -162,7 +168,23 @@ impl DiscreteContacts {
             substeps_per_contact: SUBSTEPS_PER_CONTACT,
             handled: HashMap::new(),
             states: HashMap::new(),
+            periodic: None,
         })
+    }
+
+    /// With periodic boundaries (see [`crate::periodic`]): contacts between handled bounded
+    /// colliders are found by their bounding spheres through the periodic faces and evaluated
+    /// against the nearest image; at the end of every step a dynamic body whose centre of mass
+    /// left the box through a periodic face is moved back by one box length. Pairs with a
+    /// half-space still come from rapier's broad phase.
+    pub fn with_periodic(mut self, periodic: PeriodicBox) -> Self {
+        self.periodic = periodic.is_periodic().then_some(periodic);
+        self
+    }
+
+    /// The periodic box, when one is set.
+    pub fn periodic(&self) -> Option<&PeriodicBox> {
+        self.periodic.as_ref()
     }
 
     /// With friction for every handled pair.
@@ -263,8 +285,41 @@ impl DiscreteContacts {
         world.integration_parameters.dt = saved.0;
         world.integration_parameters.num_solver_iterations = saved.1;
         result?;
+        self.wrap_bodies(world);
         stats.contacts = self.states.len();
         Ok(stats)
+    }
+
+    /// Moves every dynamic body of a handled bounded collider whose centre of mass left the
+    /// periodic box back by whole box lengths (its colliders with it; velocities untouched).
+    fn wrap_bodies(&self, world: &mut PhysicsWorld) {
+        let Some(periodic) = self.periodic else { return };
+        let mut bodies: Vec<RigidBodyHandle> = self
+            .handled
+            .iter()
+            .filter(|(_, h)| h.radius.is_finite())
+            .filter_map(|(&c, _)| world.colliders.get(c).and_then(|co| co.parent()))
+            .collect();
+        bodies.sort_by_key(|h| h.into_raw_parts());
+        bodies.dedup();
+        for h in bodies {
+            let Some(rb) = world.bodies.get_mut(h) else { continue };
+            let shift = periodic.wrap_shift(rb.center_of_mass());
+            if !rb.is_dynamic() || shift == Vector::ZERO {
+                continue;
+            }
+            let pose = *rb.position();
+            rb.set_translation(pose.translation + shift, false);
+            // Rapier moves attached colliders at its next step; the fluid coupling reads them
+            // before that.
+            for &c in rb.colliders() {
+                if let Some(co) = world.colliders.get_mut(c) {
+                    let mut p = *co.position();
+                    p.translation += shift;
+                    co.set_position(p);
+                }
+            }
+        }
     }
 
     fn kinematics(world: &PhysicsWorld, c: ColliderHandle) -> (Pose, BodyKinematics, Option<RigidBodyHandle>, Real) {
@@ -289,14 +344,17 @@ impl DiscreteContacts {
     /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
     /// candidates' order afterwards, so the result does not depend on the thread count.
     fn apply_forces(&mut self, world: &mut PhysicsWorld, stats: &mut StepStats) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
-        let pairs = self.candidate_pairs(world);
+        let pairs = self.candidate_pairs(world)?;
         let eps = self.settings.enlargement();
         let this = &*self;
         let w = &*world;
-        let evaluate = |&(ca, cb): &(ColliderHandle, ColliderHandle)| -> Result<Option<Evaluated>> {
+        let evaluate = |&(ca, cb, shift): &Candidate| -> Result<Option<Evaluated>> {
             let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
             let (pa, ka, ba, _) = Self::kinematics(w, ca);
-            let (pb, kb, bb, _) = Self::kinematics(w, cb);
+            let (mut pb, mut kb, bb, _) = Self::kinematics(w, cb);
+            // B's nearest image (periodic boxes); a rigid shift changes no force or torque.
+            pb.translation += shift;
+            kb.center_of_mass += shift;
             // Parry's exact distance (GJK) rules out candidates that do not touch for a
             // fraction of an evaluation's cost.
             let apart = parry3d_f64::query::distance(&pa, w.colliders[ca].shape(), &pb, w.colliders[cb].shape())
@@ -355,50 +413,83 @@ impl DiscreteContacts {
         Ok(applied)
     }
 
-    /// Rapier's broad-phase candidates of which both colliders are handled.
-    fn candidate_pairs(&self, world: &PhysicsWorld) -> Vec<(ColliderHandle, ColliderHandle)> {
-        world
+    /// Handled pairs that may touch now: rapier's broad-phase pairs of handled colliders — or,
+    /// in a periodic box, the bounded pairs whose grown bounding spheres meet through the
+    /// faces (with the image shift) and rapier's pairs with a half-space.
+    fn candidate_pairs(&self, world: &PhysicsWorld) -> Result<Vec<Candidate>> {
+        let rapier_pairs = world
             .narrow_phase
             .contact_pairs()
             .map(|p| (p.collider1, p.collider2))
-            .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b))
-            .collect()
+            .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b));
+        let Some(periodic) = self.periodic else {
+            return Ok(rapier_pairs.map(|(a, b)| (a, b, Vector::ZERO)).collect());
+        };
+        let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
+        let mut pairs: Vec<Candidate> =
+            rapier_pairs.filter(|(a, b)| unbounded(a) || unbounded(b)).map(|(a, b)| (a, b, Vector::ZERO)).collect();
+        let margin = 0.5 * (self.settings.enlargement()[0] + self.settings.enlargement()[1]);
+        pairs.extend(self.sphere_pairs(world, Some(&periodic), |_, _| margin)?);
+        Ok(pairs)
     }
 
-    /// Handled pairs that may touch during the next `dt`: rapier's candidates, plus pairs whose
-    /// bounding spheres (or sphere and half-space) can meet at their current speeds — rapier
-    /// only knows a pair after a step has run its broad phase, too late for a fast stiff impact.
-    fn lookahead_pairs(&self, world: &PhysicsWorld, dt: Real) -> Vec<(ColliderHandle, ColliderHandle)> {
-        let mut pairs = self.candidate_pairs(world);
-        let spheres: Vec<(ColliderHandle, Vector, Real, Real, Option<Vector>)> = self
+    /// Pairs of handled bounded colliders, at least one on a dynamic body, whose bounding
+    /// spheres grown by `grow(collider, kinematics)` meet (through the periodic faces when a box
+    /// is given); in a fixed order.
+    fn sphere_pairs(
+        &self,
+        world: &PhysicsWorld,
+        periodic: Option<&PeriodicBox>,
+        grow: impl Fn(&Handled, &BodyKinematics) -> Real,
+    ) -> Result<Vec<Candidate>> {
+        let mut bounded: Vec<(ColliderHandle, Sphere, bool)> = self
             .handled
             .iter()
-            .map(|(&h, hd)| {
-                let (pose, k, _, _) = Self::kinematics(world, h);
-                let speed = k.linvel.length() + if hd.radius.is_finite() { k.angvel.length() * hd.radius } else { 0.0 };
-                let normal = match hd.shape {
-                    ConvexShape::HalfSpace { normal } => Some(pose.rotation * normal),
-                    _ => None,
-                };
-                (h, pose.transform_point(hd.centre), hd.radius, speed, normal)
+            .filter(|(_, h)| h.radius.is_finite())
+            .map(|(&c, h)| {
+                let (pose, k, _, mass) = Self::kinematics(world, c);
+                (c, Sphere { centre: pose.transform_point(h.centre), radius: h.radius + grow(h, &k) }, mass.is_finite())
             })
             .collect();
-        for i in 0..spheres.len() {
-            for j in i + 1..spheres.len() {
-                let (a, b) = (&spheres[i], &spheres[j]);
-                let reach = (a.3 + b.3) * dt;
-                let gap = match (a.4, b.4) {
-                    (None, None) => (a.1 - b.1).length() - a.2 - b.2,
-                    (Some(n), None) => n.dot(b.1 - a.1) - b.2,
-                    (None, Some(n)) => n.dot(a.1 - b.1) - a.2,
-                    (Some(_), Some(_)) => continue,
-                };
-                if gap <= reach && !pairs.contains(&(a.0, b.0)) && !pairs.contains(&(b.0, a.0)) {
-                    pairs.push((a.0, b.0));
+        bounded.sort_by_key(|(c, _, _)| c.into_raw_parts());
+        let spheres: Vec<Sphere> = bounded.iter().map(|b| b.1).collect();
+        if let Some(p) = periodic {
+            let largest = spheres.iter().map(|s| s.radius).fold(0.0, Real::max);
+            p.check_reach(2.0 * largest)?;
+        }
+        Ok(overlapping_spheres(&spheres, periodic)
+            .into_iter()
+            .filter(|&(i, j, _)| bounded[i].2 || bounded[j].2)
+            .map(|(i, j, shift)| (bounded[i].0, bounded[j].0, shift))
+            .collect())
+    }
+
+    /// Handled pairs that may touch during the next `dt`: the candidates, plus pairs whose
+    /// bounding spheres (or sphere and half-space) can meet at their current speeds — rapier
+    /// only knows a pair after a step has run its broad phase, too late for a fast stiff impact.
+    fn lookahead_pairs(&self, world: &PhysicsWorld, dt: Real) -> Result<Vec<(ColliderHandle, ColliderHandle)>> {
+        let mut pairs: Vec<(ColliderHandle, ColliderHandle)> =
+            self.candidate_pairs(world)?.into_iter().map(|(a, b, _)| (a, b)).collect();
+        let speed = |h: &Handled, k: &BodyKinematics| k.linvel.length() + if h.radius.is_finite() { k.angvel.length() * h.radius } else { 0.0 };
+        let known: std::collections::HashSet<(ColliderHandle, ColliderHandle)> = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
+        let reached = self.sphere_pairs(world, self.periodic.as_ref(), |h, k| speed(h, k) * dt)?;
+        pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)).filter(|p| !known.contains(p)));
+        // Half-spaces against bounded bodies: few half-spaces, so a plain loop.
+        let mut planes: Vec<ColliderHandle> = self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
+        planes.sort_by_key(|c| c.into_raw_parts());
+        for &p in &planes {
+            let (pose, kp, _, _) = Self::kinematics(world, p);
+            let ConvexShape::HalfSpace { normal } = self.handled[&p].shape else { continue };
+            let (n, on_plane) = (pose.rotation * normal, pose.translation);
+            for (&c, h) in self.handled.iter().filter(|(_, h)| h.radius.is_finite()) {
+                let (pose_c, kc, _, _) = Self::kinematics(world, c);
+                let gap = n.dot(pose_c.transform_point(h.centre) - on_plane) - h.radius;
+                if gap <= (speed(h, &kc) + speed(&self.handled[&p], &kp)) * dt && !known.contains(&(p, c)) {
+                    pairs.push((p, c));
                 }
             }
         }
-        pairs
+        Ok(pairs)
     }
 
     /// Sub-steps this step needs: the Hertz contact time
@@ -409,7 +500,7 @@ impl DiscreteContacts {
     /// with [`Error::ContactTooSoft`].
     pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
         let mut worst: Option<(Real, String)> = None;
-        for (ca, cb) in self.lookahead_pairs(world, dt) {
+        for (ca, cb) in self.lookahead_pairs(world, dt)? {
             let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
             let (_, ka, _, ma) = Self::kinematics(world, ca);
             let (_, kb, _, mb) = Self::kinematics(world, cb);

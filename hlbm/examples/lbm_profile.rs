@@ -9,7 +9,7 @@ fn main() {
             for z in 0..96 {
                 for y in 0..96 {
                     for x in (0..96).step_by(5) {
-                        lat.particles.add(x, y, z, 0.5, [1e-3, 0.0, 0.0], (x / 20) as u32);
+                        lat.particles.add(x, y, z, 0.5, [1e-3, 0.0, 0.0], [0.0; 3], (x / 20) as u32);
                     }
                 }
             }

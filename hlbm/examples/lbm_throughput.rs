@@ -64,7 +64,7 @@ fn add_particles(lat: &mut Lattice, fraction: f64) -> usize {
                             let db = hlbm::solid_fraction(d, 1.0);
                             let w = |v: i64, n: usize| v.rem_euclid(n as i64) as usize;
                             if db > 0.0 {
-                                lat.particles.add(w(p[0], nx), w(p[1], ny), w(p[2], nz), db, [1e-3, 0.0, 0.0], id);
+                                lat.particles.add(w(p[0], nx), w(p[1], ny), w(p[2], nz), db, [1e-3, 0.0, 0.0], [p[0] as f64 - x, p[1] as f64 - y, p[2] as f64 - z], id);
                             }
                         }
                     }

@@ -22,3 +22,25 @@ pub fn di_felice_wall_factor(lambda: f64, re: f64) -> f64 {
     let alpha = (3.3 + 0.085 * re) / (1.0 + 0.1 * re);
     ((1.0 - lambda) / (1.0 - 0.33 * lambda)).powf(alpha)
 }
+
+/// Richardson & Zaki (1954) exponent `n` of the hindered settling law `⟨v⟩/v_s = (1 − φ)^n`,
+/// with `Re = v_s d / ν` of the single sphere: 4.65 for Re ≤ 0.2, `4.35 Re^−0.03` up to 1,
+/// `4.45 Re^−0.1` up to 500, 2.39 above.
+pub fn richardson_zaki_exponent(re: f64) -> f64 {
+    if re <= 0.2 {
+        4.65
+    } else if re <= 1.0 {
+        4.35 * re.powf(-0.03)
+    } else if re <= 500.0 {
+        4.45 * re.powf(-0.1)
+    } else {
+        2.39
+    }
+}
+
+/// Garside & Al-Dibouni (1977) exponent `n = (5.1 + 0.27 Re^0.9)/(1 + 0.1 Re^0.9)` of the
+/// same law.
+pub fn garside_al_dibouni_exponent(re: f64) -> f64 {
+    let r = re.powf(0.9);
+    (5.1 + 0.27 * r) / (1.0 + 0.1 * r)
+}

@@ -34,8 +34,8 @@ pub type NodeKind = u8;
 pub struct ParticleForce {
     /// Σ over its nodes of `-ρ Δu` (momentum per step).
     pub force: [f64; 3],
-    /// Σ over its nodes of `x × (-ρ Δu)`, about the lattice origin; the torque about a centre
-    /// `x_c` is `moment - x_c × force`.
+    /// Σ over its nodes of `arm × (-ρ Δu)`: the moment about the particle's centre of mass
+    /// (the [`ParticleNode::arm`](crate::ParticleNode::arm) of each node).
     pub moment: [f64; 3],
 }
 
@@ -302,21 +302,26 @@ impl Lattice {
 
     /// Total mass and momentum of the fluid nodes.
     pub fn totals(&self) -> (f64, [f64; 3]) {
-        let (mut m, mut p) = (0.0, [0.0; 3]);
-        for z in 0..self.nz {
-            for y in 0..self.ny {
-                for x in 0..self.nx {
-                    if self.kind[self.index(x, y, z)] == 0 {
-                        let (rho, u) = self.density_velocity(x, y, z);
-                        m += rho;
-                        for d in 0..3 {
-                            p[d] += rho * u[d];
+        // Per z-slab on all cores, slabs summed in order: the same sum for any thread count.
+        let slabs: Vec<(f64, [f64; 3])> = (0..self.nz)
+            .into_par_iter()
+            .map(|z| {
+                let (mut m, mut p) = (0.0, [0.0; 3]);
+                for y in 0..self.ny {
+                    for x in 0..self.nx {
+                        if self.kind[self.index(x, y, z)] == 0 {
+                            let (rho, u) = self.density_velocity(x, y, z);
+                            m += rho;
+                            for d in 0..3 {
+                                p[d] += rho * u[d];
+                            }
                         }
                     }
                 }
-            }
-        }
-        (m, p)
+                (m, p)
+            })
+            .collect();
+        slabs.into_iter().fold((0.0, [0.0; 3]), |(m, p), (ms, ps)| (m + ms, [p[0] + ps[0], p[1] + ps[1], p[2] + ps[2]]))
     }
 
     #[inline]
@@ -512,6 +517,7 @@ impl Lattice {
             // Forcing: body acceleration plus the particle term d_B (v_p - u).
             let mut du = [[0.0; LANES]; 3];
             let mut dbv = [[0.0f64; LANES]; 4];
+            let mut arm = [[0.0f64; LANES]; 3];
             let mut pid = [u32::MAX; LANES];
             if forced {
                 for d in 0..3 {
@@ -523,6 +529,7 @@ impl Lattice {
                     dbv[0][l] = p.d_b;
                     for d in 0..3 {
                         dbv[d + 1][l] = p.velocity[d];
+                        arm[d][l] = p.arm[d];
                     }
                     pid[l] = p.id;
                     pnext += 1;
@@ -558,9 +565,8 @@ impl Lattice {
                 for l in 0..lanes {
                     if pid[l] != u32::MAX {
                         let fp = [0, 1, 2].map(|d| -rho[l] * (du[d][l] - g[d]));
-                        let pos = [(x0 + l) as f64, y as f64, z as f64];
                         let e = res.forces.entry(pid[l]).or_default();
-                        let m = cross(pos, fp);
+                        let m = cross([arm[0][l], arm[1][l], arm[2][l]], fp);
                         for d in 0..3 {
                             e.force[d] += fp[d];
                             e.moment[d] += m[d];

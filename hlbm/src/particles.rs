@@ -10,6 +10,10 @@ pub struct ParticleNode {
     pub d_b: f64,
     /// Particle velocity at the node, `v + ω × (x - x_cm)` (lattice units).
     pub velocity: [f64; 3],
+    /// Lever arm: the node's position minus the particle's centre of mass (lattice units),
+    /// taken on the particle's side of a periodic face, so the moment is right for a particle
+    /// that straddles one.
+    pub arm: [f64; 3],
     /// Particle id (reported back with its force).
     pub id: u32,
 }
@@ -37,26 +41,72 @@ impl ParticleField {
         self.count = 0;
     }
 
-    /// Adds (or, for two particles on one node, superposes) node `(x, y, z)`.
+    /// Adds (or, for two particles on one node, superposes) node `(x, y, z)` of particle `id`
+    /// with solid fraction `d_b`, particle velocity `velocity` there and lever arm `arm` (node
+    /// minus centre of mass), all in lattice units.
     ///
     /// Nodes must be added with `d_b > 0`; a node already covered keeps the larger `d_B` and the
-    /// `d_B`-weighted velocity.
-    pub fn add(&mut self, x: usize, y: usize, z: usize, d_b: f64, velocity: [f64; 3], id: u32) {
+    /// `d_B`-weighted velocity, and reports its force to the particle with the larger `d_B`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add(&mut self, x: usize, y: usize, z: usize, d_b: f64, velocity: [f64; 3], arm: [f64; 3], id: u32) {
         debug_assert!(x < self.nx);
         let row = &mut self.rows[z * self.ny + y];
-        let node = ParticleNode { x: x as u32, d_b, velocity, id };
+        let node = ParticleNode { x: x as u32, d_b, velocity, arm, id };
         match row.binary_search_by_key(&(x as u32), |n| n.x) {
             Ok(i) => {
                 let o = row[i];
                 let w = o.d_b + d_b;
                 let v = [0, 1, 2].map(|d| (o.velocity[d] * o.d_b + velocity[d] * d_b) / w);
-                row[i] = ParticleNode { x: x as u32, d_b: o.d_b.max(d_b), velocity: v, id: if d_b > o.d_b { id } else { o.id } };
+                let (arm, id) = if d_b > o.d_b { (arm, id) } else { (o.arm, o.id) };
+                row[i] = ParticleNode { x: x as u32, d_b: o.d_b.max(d_b), velocity: v, arm, id };
             }
             Err(i) => {
                 row.insert(i, node);
                 self.count += 1;
             }
         }
+    }
+
+    /// Refills the whole field slab by slab, on all cores: `fill(z, push)` calls
+    /// `push(y, node)` for the nodes of slab `z`, in any order; every row is then sorted by `x`,
+    /// and nodes pushed twice are superposed as [`add`](Self::add) does, in the order pushed —
+    /// so the field does not depend on the thread count. Returns what each `fill` returned, in
+    /// slab order.
+    pub fn fill_slabs<R: Send>(&mut self, fill: impl Fn(usize, &mut dyn FnMut(usize, ParticleNode)) -> R + Sync) -> Vec<R> {
+        use rayon::prelude::*;
+        let ny = self.ny;
+        let results: Vec<(R, usize)> = self
+            .rows
+            .par_chunks_mut(ny)
+            .enumerate()
+            .map(|(z, slab)| {
+                for row in slab.iter_mut() {
+                    row.clear();
+                }
+                let r = fill(z, &mut |y, node| slab[y].push(node));
+                let mut count = 0;
+                for row in slab.iter_mut() {
+                    row.sort_by_key(|n| n.x);
+                    row.dedup_by(|later, kept| {
+                        if later.x != kept.x {
+                            return false;
+                        }
+                        let w = kept.d_b + later.d_b;
+                        let v = [0, 1, 2].map(|d| (kept.velocity[d] * kept.d_b + later.velocity[d] * later.d_b) / w);
+                        if later.d_b > kept.d_b {
+                            (kept.arm, kept.id) = (later.arm, later.id);
+                        }
+                        kept.d_b = kept.d_b.max(later.d_b);
+                        kept.velocity = v;
+                        true
+                    });
+                    count += row.len();
+                }
+                (r, count)
+            })
+            .collect();
+        self.count = results.iter().map(|r| r.1).sum();
+        results.into_iter().map(|r| r.0).collect()
     }
 
     /// The nodes of row `row = z * ny + y`, sorted by `x`.

@@ -76,7 +76,7 @@ fn moving_sphere(lat: &mut Lattice, v: [f64; 3]) {
                 let d = ((x as f64 - c[0]).powi(2) + (y as f64 - c[1]).powi(2) + (z as f64 - c[2]).powi(2)).sqrt() - 4.0;
                 let db = hlbm::solid_fraction(d, 1.0);
                 if db > 0.0 {
-                    lat.particles.add(x, y, z, db, v, 7);
+                    lat.particles.add(x, y, z, db, v, [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]], 7);
                 }
             }
         }

@@ -31,7 +31,7 @@ fn sphere_reaches_the_schiller_naumann_terminal_velocity() {
                     let p = [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]];
                     let db = solid_fraction((p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - r, eps);
                     if db > 0.0 {
-                        lat.particles.add(x, y, z, db, v, 0);
+                        lat.particles.add(x, y, z, db, v, p, 0);
                     }
                 }
             }

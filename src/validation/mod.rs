@@ -9,3 +9,5 @@ pub mod stability;
 pub mod drop_in;
 #[cfg(feature = "fluid")]
 pub mod wet_rebound;
+#[cfg(feature = "fluid")]
+pub mod hindered_settling;

@@ -1,0 +1,343 @@
+//! Hindered settling of spheres and cubes in a triply periodic box (seed 002 §5): rapier
+//! bodies, the HLBM fluid and periodic discrete contacts four-way coupled. Compares the mean
+//! settling velocity with Richardson–Zaki and Garside–Al-Dibouni, with and without contacts.
+//!
+//! ```text
+//! cargo run --release --example hindered_settling -- --quick      # minutes: D = 6 Δx, box 8 D, Ar = 1000
+//! cargo run --release --example hindered_settling                 # seed 002: D = 9 Δx, box 15 D (hours)
+//! cargo run --release --example hindered_settling -- --peer-case  # seconds per step on the OpenLB case
+//! ```
+//! Options: `--phi 0.1,0.2,0.3`, `--ar 500,1000,2000`, `--shapes sphere,cube` (cubes at the
+//! first Ar only), `--nodes-per-d 9`, `--box-d 15` (box edge in D), `--duration 200` (in D/U,
+//! U the Stokes velocity), `--tau 0.55`, `--no-compare` (skip the runs without contacts),
+//! `--peer-steps 100`.
+//!
+//! Writes `target/validation/hindered_settling.csv`
+//! (`shape,phi,ar,n_particles,v_mean_over_vs,richardson_zaki,garside_al_dibouni,with_contacts,wall_time_s,mlups`),
+//! `hindered_settling_series.csv` (⟨v⟩/v_s over time), `hindered_settling.png`, and for the
+//! peer case `hindered_settling_peer.csv`.
+
+#[path = "common/mod.rs"]
+mod common;
+
+use std::time::Instant;
+
+use discrete_contact::validation::hindered_settling::{run, HinderedSettling, ParticleShape, SettlingResult};
+use plotters::prelude::*;
+
+/// One finished run.
+struct Run {
+    case: HinderedSettling,
+    result: SettlingResult,
+}
+
+/// OpenLB 1.9 on this kind of machine (2 cores, 2 MPI ranks), the peer case, MLUPs:
+/// (φ, with contacts, without).
+const OPENLB: [(f64, f64, f64); 2] = [(0.15, 2.95, 3.4), (0.30, 1.25, 2.6)];
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args = common::Args::from_env();
+    let dir = common::output_dir();
+    if args.flag("--peer-case") {
+        return peer_case(&args, &dir);
+    }
+    let quick = args.flag("--quick");
+    let phis = args.list("--phi", &[0.1, 0.2, 0.3]);
+    let ars = args.list("--ar", if quick { &[1000.0] } else { &[500.0, 1000.0, 2000.0] });
+    let shapes: Vec<ParticleShape> = args
+        .value("--shapes")
+        .unwrap_or("sphere,cube")
+        .split(',')
+        .map(|s| match s.trim() {
+            "sphere" => ParticleShape::Sphere,
+            "cube" => ParticleShape::Cube,
+            other => panic!("--shapes: sphere or cube, not {other}"),
+        })
+        .collect();
+    let case_for = |shape, phi, ar, contacts| -> Result<HinderedSettling, discrete_contact::Error> {
+        let mut c = HinderedSettling::seed_002(shape, phi, ar)?;
+        c.nodes_per_diameter = args.number("--nodes-per-d", if quick { 6.0 } else { 9.0 });
+        let box_d = args.number("--box-d", if quick { 8.0 } else { 15.0 });
+        c.box_nodes = (box_d * c.nodes_per_diameter).round() as usize;
+        c.duration = args.number("--duration", if quick { 100.0 } else { 200.0 });
+        c.tau = args.number("--tau", c.tau);
+        c.contacts = contacts;
+        Ok(c)
+    };
+    let mut jobs = Vec::new();
+    for &ar in &ars {
+        for &phi in &phis {
+            for &shape in &shapes {
+                if shape == ParticleShape::Sphere || ar == ars[0] {
+                    jobs.push((shape, phi, ar, true));
+                }
+            }
+            if !args.flag("--no-compare") && shapes.contains(&ParticleShape::Sphere) {
+                jobs.push((ParticleShape::Sphere, phi, ar, false));
+            }
+        }
+    }
+    let c0 = case_for(ParticleShape::Sphere, phis[0], ars[0], true)?;
+    println!(
+        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, run {} D/U",
+        c0.diameter * 1e3,
+        c0.nodes_per_diameter,
+        c0.box_nodes,
+        c0.box_nodes as f64 / c0.nodes_per_diameter,
+        c0.density_ratio,
+        c0.tau,
+        c0.restitution,
+        c0.friction.static_coefficient,
+        c0.friction.kinetic_coefficient,
+        c0.material.youngs_modulus(),
+        c0.n_c,
+        c0.duration
+    );
+
+    let mut runs = Vec::new();
+    for (shape, phi, ar, contacts) in jobs {
+        let case = case_for(shape, phi, ar, contacts)?;
+        println!(
+            "\n{} φ = {phi}, Ar = {ar}, {} particles, {}: ν = {:.3e} m²/s, Δt = {:.2e} s, {} steps, v_s = {:.4} m/s (Re = {:.1})",
+            shape.name(),
+            case.particle_count(),
+            if contacts { "with contacts" } else { "no contacts" },
+            case.viscosity(),
+            case.dt(),
+            case.steps(),
+            case.terminal_velocity(),
+            case.reynolds()
+        );
+        let result = run_with_progress(&case)?;
+        println!(
+            "  ⟨v⟩/v_s = {:.3} (Richardson–Zaki {:.3}, Garside–Al-Dibouni {:.3}); {:.1} s, {:.1} MLUPs; time in lattice {:.0} %, mapping {:.0} %, bodies + contacts {:.0} %; at most {} contacts",
+            result.v_mean_over_vs,
+            case.richardson_zaki(),
+            case.garside_al_dibouni(),
+            result.wall_time,
+            result.mlups(),
+            100.0 * result.seconds.lattice / result.wall_time,
+            100.0 * result.seconds.mapping / result.wall_time,
+            100.0 * result.seconds.bodies / result.wall_time,
+            result.max_contacts
+        );
+        runs.push(Run { case, result });
+    }
+
+    let rows: Vec<String> = runs
+        .iter()
+        .map(|r| {
+            format!(
+                "{},{},{},{},{:.4},{:.4},{:.4},{},{:.2},{:.2}",
+                r.case.shape.name(),
+                r.case.volume_fraction,
+                r.case.archimedes,
+                r.result.particles,
+                r.result.v_mean_over_vs,
+                r.case.richardson_zaki(),
+                r.case.garside_al_dibouni(),
+                r.case.contacts,
+                r.result.wall_time,
+                r.result.mlups()
+            )
+        })
+        .collect();
+    common::write_csv(
+        &dir.join("hindered_settling.csv"),
+        "shape,phi,ar,n_particles,v_mean_over_vs,richardson_zaki,garside_al_dibouni,with_contacts,wall_time_s,mlups",
+        &rows,
+    );
+    let series: Vec<String> = runs
+        .iter()
+        .flat_map(|r| {
+            r.result.samples.iter().map(move |(t, v)| {
+                format!("{},{},{},{},{:.5},{:.4}", r.case.shape.name(), r.case.volume_fraction, r.case.archimedes, r.case.contacts, t, v)
+            })
+        })
+        .collect();
+    common::write_csv(&dir.join("hindered_settling_series.csv"), "shape,phi,ar,with_contacts,t_s,v_over_vs", &series);
+
+    println!("\n{:>7} {:>5} {:>6} {:>5} {:>8} {:>8} {:>8} {:>9} {:>8} {:>7}", "shape", "phi", "Ar", "N", "<v>/v_s", "R-Z", "G-AD", "contacts", "wall s", "MLUPs");
+    for r in &runs {
+        println!(
+            "{:>7} {:>5} {:>6} {:>5} {:>8.3} {:>8.3} {:>8.3} {:>9} {:>8.1} {:>7.1}",
+            r.case.shape.name(),
+            r.case.volume_fraction,
+            r.case.archimedes,
+            r.result.particles,
+            r.result.v_mean_over_vs,
+            r.case.richardson_zaki(),
+            r.case.garside_al_dibouni(),
+            r.case.contacts,
+            r.result.wall_time,
+            r.result.mlups()
+        );
+    }
+    // Cubes against spheres at equal φ and Ar.
+    for c in runs.iter().filter(|r| r.case.shape == ParticleShape::Cube) {
+        if let Some(s) = runs.iter().find(|r| {
+            r.case.shape == ParticleShape::Sphere && r.case.contacts && r.case.volume_fraction == c.case.volume_fraction && r.case.archimedes == c.case.archimedes
+        }) {
+            println!(
+                "cubes at φ = {}, Ar = {}: {:.1} % slower than spheres (seed 002: 13 % at low φ to 26 % at high φ)",
+                c.case.volume_fraction,
+                c.case.archimedes,
+                100.0 * (1.0 - c.result.v_mean_over_vs / s.result.v_mean_over_vs)
+            );
+        }
+    }
+    plot(&dir.join("hindered_settling.png"), &runs)?;
+    println!("\nwrote {}/hindered_settling.csv, hindered_settling_series.csv, hindered_settling.png", dir.display());
+    Ok(())
+}
+
+/// Runs a case with a progress line every 5 s.
+fn run_with_progress(case: &HinderedSettling) -> Result<SettlingResult, discrete_contact::Error> {
+    let start = Instant::now();
+    let mut last = 0.0;
+    let cells = (case.box_nodes as f64).powi(3);
+    run(case, |p| {
+        let el = start.elapsed().as_secs_f64();
+        if el - last > 5.0 {
+            last = el;
+            let contacts = p.report.contacts.map_or(0, |c| c.contacts);
+            println!(
+                "  step {:>6}/{}  ⟨v⟩/v_s = {:.3}  {} contacts  {:.1} MLUPs  ETA {:.0} s",
+                p.step,
+                p.steps,
+                p.v_over_vs,
+                contacts,
+                p.step as f64 * cells / el / 1e6,
+                el * (p.steps as f64 / p.step as f64 - 1.0)
+            );
+        }
+    })
+}
+
+/// The peer case (seed 002's study as in its authors' public example): 15 D box, D = 9 Δx,
+/// φ = 15 % and 30 %, with and without contacts, `--peer-steps` steps each; seconds per step
+/// and MLUPs beside OpenLB 1.9's on this kind of machine.
+fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    let steps = args.number("--peer-steps", 100.0) as u64;
+    let mut rows = Vec::new();
+    println!("{:>5} {:>6} {:>9} {:>8} {:>9} {:>8} {:>10} {:>8}", "phi", "N", "contacts", "s/step", "MLUPs", "OpenLB", "speed-up", "<v>/v_s");
+    for (phi, openlb_with, openlb_without) in OPENLB {
+        for contacts in [true, false] {
+            let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, phi, 1000.0)?;
+            case.contacts = contacts;
+            case.duration = steps as f64 * case.dt() * case.stokes_velocity() / case.diameter;
+            let r = run_with_progress(&case)?;
+            let openlb = if contacts { openlb_with } else { openlb_without };
+            println!(
+                "{:>5} {:>6} {:>9} {:>8.3} {:>9.2} {:>8.2} {:>9.1}× {:>8.3}   (lattice {:.0} %, mapping {:.0} %, bodies + contacts {:.0} %)",
+                phi,
+                r.particles,
+                contacts,
+                r.seconds_per_step(),
+                r.mlups(),
+                openlb,
+                r.mlups() / openlb,
+                r.v_mean_over_vs,
+                100.0 * r.seconds.lattice / r.wall_time,
+                100.0 * r.seconds.mapping / r.wall_time,
+                100.0 * r.seconds.bodies / r.wall_time
+            );
+            rows.push(format!(
+                "{},{},{},{},{},{:.4},{:.3},{:.3},{:.4},{:.4},{:.4}",
+                phi,
+                r.particles,
+                contacts,
+                r.cells,
+                r.steps,
+                r.seconds_per_step(),
+                r.mlups(),
+                openlb,
+                r.seconds.lattice / r.steps as f64,
+                r.seconds.mapping / r.steps as f64,
+                r.seconds.bodies / r.steps as f64
+            ));
+        }
+    }
+    common::write_csv(
+        &dir.join("hindered_settling_peer.csv"),
+        "phi,n_particles,with_contacts,cells,steps,s_per_step,mlups,openlb_mlups,lattice_s_per_step,mapping_s_per_step,bodies_s_per_step",
+        &rows,
+    );
+    println!("wrote {}/hindered_settling_peer.csv", dir.display());
+    Ok(())
+}
+
+/// ⟨v⟩/v_s against φ with both correlations (Ar of the first run), with and without contacts.
+fn plot(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::error::Error>> {
+    common::register_fonts();
+    let tmp = path.with_extension("tmp.png");
+    {
+        let root = BitMapBackend::new(&tmp, (1000, 700)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut ch = ChartBuilder::on(&root)
+            .caption("Hindered settling in a triply periodic box", ("sans-serif", 24))
+            .margin(14)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..0.35, 0.0..1.0)?;
+        ch.configure_mesh().x_desc("φ").y_desc("⟨v⟩ / v_s").label_style(("sans-serif", 15)).draw()?;
+        let mut ars: Vec<f64> = runs.iter().map(|r| r.case.archimedes).collect();
+        ars.sort_by(f64::total_cmp);
+        ars.dedup();
+        let colours = [RED, BLUE, GREEN];
+        for (k, &ar) in ars.iter().enumerate() {
+            let colour = colours[k % colours.len()];
+            let Some(any) = runs.iter().find(|r| r.case.archimedes == ar) else { continue };
+            let curve = |f: &dyn Fn(&HinderedSettling) -> f64| -> Vec<(f64, f64)> {
+                (0..=35)
+                    .map(|i| {
+                        let mut c = any.case.clone();
+                        c.volume_fraction = i as f64 / 100.0;
+                        (c.volume_fraction, f(&c))
+                    })
+                    .collect()
+            };
+            let rz = colour.mix(0.6).stroke_width(1);
+            ch.draw_series(LineSeries::new(curve(&|c| c.richardson_zaki()), rz))?
+                .label(format!("Richardson–Zaki, Ar = {ar}"))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], rz));
+            ch.draw_series(DashedLineSeries::new(curve(&|c| c.garside_al_dibouni()), 6, 4, rz))?
+                .label(format!("Garside–Al-Dibouni, Ar = {ar}"))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], rz));
+            for (shape, contacts, label) in [
+                (ParticleShape::Sphere, true, "spheres, contacts"),
+                (ParticleShape::Sphere, false, "spheres, no contacts"),
+                (ParticleShape::Cube, true, "cubes, contacts"),
+            ] {
+                let pts: Vec<(f64, f64)> = runs
+                    .iter()
+                    .filter(|r| r.case.archimedes == ar && r.case.shape == shape && r.case.contacts == contacts)
+                    .map(|r| (r.case.volume_fraction, r.result.v_mean_over_vs))
+                    .collect();
+                if pts.is_empty() {
+                    continue;
+                }
+                let style = colour.filled();
+                let label = format!("{label}, Ar = {ar}");
+                match (shape, contacts) {
+                    (ParticleShape::Sphere, true) => {
+                        ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, style)))?.label(label).legend(move |(x, y)| Circle::new((x + 9, y), 6, style));
+                    }
+                    (ParticleShape::Sphere, false) => {
+                        let s = colour.stroke_width(2);
+                        ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, s)))?.label(label).legend(move |(x, y)| Circle::new((x + 9, y), 6, s));
+                    }
+                    (ParticleShape::Cube, _) => {
+                        ch.draw_series(pts.iter().map(|&p| Rectangle::new([(p.0 - 0.004, p.1 - 0.012), (p.0 + 0.004, p.1 + 0.012)], style)))?
+                            .label(label)
+                            .legend(move |(x, y)| Rectangle::new([(x + 4, y - 5), (x + 14, y + 5)], style));
+                    }
+                }
+            }
+        }
+        ch.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 13)).position(SeriesLabelPosition::UpperRight).draw()?;
+        root.present()?;
+    }
+    std::fs::rename(&tmp, path)?;
+    Ok(())
+}

@@ -1,0 +1,409 @@
+//! Hindered settling of many spheres or cubes in a triply periodic box (seed 002 §5, DESIGN §6):
+//! rapier bodies, the HLBM fluid and periodic discrete contacts in one four-way coupled step.
+//!
+//! The particles are placed at random without overlap, released from rest, and settle along
+//! −z; the fluid carries the balance acceleration of [`Fluid::balance_weight`], so the
+//! suspension as a whole does not accelerate. The mean settling velocity is measured in the
+//! frame of zero volume flux — the frame of a closed settling column, the one the
+//! correlations refer to: `⟨v⟩ = (1 − φ)(⟨v_p⟩ − ⟨u_f⟩)` with `⟨u_f⟩` the mean velocity of
+//! the fluid outside the particles — and averaged after the initial transient. It is compared
+//! with Richardson–Zaki and Garside–Al-Dibouni, `(1 − φ)^n`, scaled by the single sphere's
+//! Schiller–Naumann terminal velocity `v_s`.
+//!
+//! [`HinderedSettling::seed_002`] holds the seed's values (and those of its authors' public
+//! example where the text lost them); every field can be changed.
+
+use std::time::Instant;
+
+use parry3d_f64::query;
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+use rapier3d_f64::prelude::{
+    ColliderBuilder, ColliderHandle, InteractionGroups, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
+};
+
+use crate::coupling::{Fluid, FluidSettings, FluidStepReport};
+use crate::error::{Error, Result};
+use crate::material::{Friction, Material};
+use crate::math::{Pose, Real, Rotation, Vector};
+use crate::overlap::{IntegrationMode, OverlapSettings};
+use crate::periodic::PeriodicBox;
+use crate::rapier::{DiscreteContacts, StepPolicy};
+use hlbm::correlations::{garside_al_dibouni_exponent, richardson_zaki_exponent, schiller_naumann_terminal_velocity};
+
+/// Standard gravity (m/s²).
+const G: Real = 9.81;
+
+/// The particles' shape; a cube has the volume of the sphere of diameter `D`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParticleShape {
+    /// Spheres of diameter `D`.
+    Sphere,
+    /// Cubes of edge `D (π/6)^(1/3)`, randomly oriented.
+    Cube,
+}
+
+impl ParticleShape {
+    /// The name used in reports (`sphere`, `cube`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sphere => "sphere",
+            Self::Cube => "cube",
+        }
+    }
+}
+
+/// One hindered-settling run (SI units).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HinderedSettling {
+    /// Particle shape.
+    pub shape: ParticleShape,
+    /// Solid volume fraction `φ`.
+    pub volume_fraction: Real,
+    /// Archimedes number `Ar = (ρ_p/ρ_f − 1) g D³ / ν²`; sets the viscosity.
+    pub archimedes: Real,
+    /// Volume-equivalent diameter `D` (m).
+    pub diameter: Real,
+    /// `ρ_p / ρ_f`.
+    pub density_ratio: Real,
+    /// Fluid density `ρ_f` (kg/m³).
+    pub fluid_density: Real,
+    /// Lattice nodes per diameter, `D / Δx`.
+    pub nodes_per_diameter: Real,
+    /// Lattice nodes along each edge of the cubic box (box edge = this × Δx).
+    pub box_nodes: usize,
+    /// Relaxation time `τ` (sets `Δt`).
+    pub tau: Real,
+    /// Restitution of particle contacts.
+    pub restitution: Real,
+    /// Friction of particle contacts.
+    pub friction: Friction,
+    /// Particles' elastic constants (softened, as in the seed).
+    pub material: Material,
+    /// Overlap resolution of the contacts.
+    pub n_c: usize,
+    /// Contact enlargement in lattice spacings (split over the two bodies).
+    pub enlargement_cells: Real,
+    /// Smoothing width of `d_B` in lattice spacings.
+    pub smoothing_cells: Real,
+    /// With the discrete contact (without it particles pass through each other).
+    pub contacts: bool,
+    /// Simulated time in units of `D / U`, `U` the Stokes velocity `(ρ_p/ρ_f − 1) g D² / (18 ν)`.
+    pub duration: Real,
+    /// Averaging starts at this fraction of the duration (after the transient).
+    pub averaging_start: Real,
+    /// Seed of the random placement.
+    pub seed: u64,
+}
+
+impl HinderedSettling {
+    /// Seed 002's case at volume fraction `phi` and Archimedes number `ar`: D = 3 mm resolved by
+    /// 9 nodes, box 15 D (135³ nodes), ρ_p/ρ_f = 3.3 (ρ_f = 1000 kg/m³), τ = 0.55, e = 0.926,
+    /// μ_s = 0.32, μ_k = 0.16, v_s = 1 mm/s, E = 5 kPa, ν = 0.245, N_c = 8, enlargement
+    /// Δx/5, smoothing Δx/2, 200 D/U, averaged over the second half.
+    pub fn seed_002(shape: ParticleShape, phi: Real, ar: Real) -> Result<Self> {
+        Ok(Self {
+            shape,
+            volume_fraction: phi,
+            archimedes: ar,
+            diameter: 3e-3,
+            density_ratio: 3.3,
+            fluid_density: 1000.0,
+            nodes_per_diameter: 9.0,
+            box_nodes: 135,
+            tau: 0.55,
+            restitution: 0.926,
+            friction: Friction::new(0.32, 0.16, 1e-3)?,
+            material: Material::new(5e3, 0.245)?,
+            n_c: 8,
+            enlargement_cells: 0.2,
+            smoothing_cells: 0.5,
+            contacts: true,
+            duration: 200.0,
+            averaging_start: 0.5,
+            seed: 2,
+        })
+    }
+
+    /// Kinematic viscosity from the Archimedes number (m²/s).
+    pub fn viscosity(&self) -> Real {
+        ((self.density_ratio - 1.0) * G * self.diameter.powi(3) / self.archimedes).sqrt()
+    }
+
+    /// Lattice spacing (m).
+    pub fn dx(&self) -> Real {
+        self.diameter / self.nodes_per_diameter
+    }
+
+    /// Fluid time step from `τ` (s).
+    pub fn dt(&self) -> Real {
+        (self.tau - 0.5) * self.dx() * self.dx() / (3.0 * self.viscosity())
+    }
+
+    /// Box edge (m).
+    pub fn box_length(&self) -> Real {
+        self.box_nodes as Real * self.dx()
+    }
+
+    /// Particles for the volume fraction.
+    pub fn particle_count(&self) -> usize {
+        let v = std::f64::consts::PI / 6.0 * self.diameter.powi(3);
+        (self.volume_fraction * self.box_length().powi(3) / v).round() as usize
+    }
+
+    /// Stokes velocity `U` (m/s), the time scale of the run.
+    pub fn stokes_velocity(&self) -> Real {
+        (self.density_ratio - 1.0) * G * self.diameter.powi(2) / (18.0 * self.viscosity())
+    }
+
+    /// The single sphere's terminal velocity `v_s` (Schiller–Naumann, m/s).
+    pub fn terminal_velocity(&self) -> Real {
+        schiller_naumann_terminal_velocity(self.diameter, self.viscosity(), self.density_ratio, G)
+    }
+
+    /// The single sphere's Reynolds number `v_s D / ν`.
+    pub fn reynolds(&self) -> Real {
+        self.terminal_velocity() * self.diameter / self.viscosity()
+    }
+
+    /// Richardson–Zaki's `⟨v⟩/v_s = (1 − φ)^n`.
+    pub fn richardson_zaki(&self) -> Real {
+        (1.0 - self.volume_fraction).powf(richardson_zaki_exponent(self.reynolds()))
+    }
+
+    /// Garside–Al-Dibouni's `⟨v⟩/v_s = (1 − φ)^n`.
+    pub fn garside_al_dibouni(&self) -> Real {
+        (1.0 - self.volume_fraction).powf(garside_al_dibouni_exponent(self.reynolds()))
+    }
+
+    /// Fluid steps of the run.
+    pub fn steps(&self) -> u64 {
+        (self.duration * self.diameter / self.stokes_velocity() / self.dt()).ceil() as u64
+    }
+
+    fn check(&self) -> Result<()> {
+        let bad = |name, value, allowed| Err(Error::InvalidParameter { name, value, allowed });
+        if !(self.volume_fraction > 0.0 && self.volume_fraction <= 0.35) {
+            return bad("volume_fraction", self.volume_fraction, "0 < phi <= 0.35 (random placement)");
+        }
+        if !(self.density_ratio > 1.0 && self.density_ratio.is_finite()) {
+            return bad("density_ratio", self.density_ratio, "> 1 (the particles settle)");
+        }
+        if !(self.averaging_start >= 0.0 && self.averaging_start < 1.0) {
+            return bad("averaging_start", self.averaging_start, "0 <= start < 1");
+        }
+        if !(self.duration > 0.0 && self.duration.is_finite()) {
+            return bad("duration", self.duration, "> 0 (in D/U)");
+        }
+        Ok(())
+    }
+}
+
+/// What a run measured.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SettlingResult {
+    /// Particles placed.
+    pub particles: usize,
+    /// (time (s), `⟨v⟩/v_s`) at every sample.
+    pub samples: Vec<(Real, Real)>,
+    /// `⟨v⟩/v_s` averaged after the transient.
+    pub v_mean_over_vs: Real,
+    /// Fluid steps run.
+    pub steps: u64,
+    /// Lattice nodes.
+    pub cells: usize,
+    /// Wall-clock time of the steps (s).
+    pub wall_time: Real,
+    /// Wall-clock time of the set-up: placement, bodies, lattice (s).
+    pub setup_time: Real,
+    /// Wall-clock seconds in mapping, lattice and bodies (rapier + contacts), summed.
+    pub seconds: crate::coupling::StepSeconds,
+    /// Most contacts alive at once.
+    pub max_contacts: usize,
+}
+
+impl SettlingResult {
+    /// Million lattice-node updates per second over the whole run (fluid, mapping, contacts).
+    pub fn mlups(&self) -> Real {
+        self.cells as Real * self.steps as Real / self.wall_time.max(1e-12) / 1e6
+    }
+
+    /// Seconds per fluid step.
+    pub fn seconds_per_step(&self) -> Real {
+        self.wall_time / self.steps.max(1) as Real
+    }
+}
+
+/// Random non-overlapping poses of `n` particles in the periodic box (random sequential
+/// addition, gap at least a quarter `Δx` so no contact starts at once).
+pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
+    let l = case.box_length();
+    let domain = PeriodicBox::new(Vector::ZERO, Vector::splat(l), [true; 3])?;
+    let shape = particle_shape(case);
+    let radius = shape.compute_local_bounding_sphere().radius();
+    let gap = 0.25 * case.dx();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(case.seed);
+    let mut placed: Vec<Pose> = Vec::with_capacity(n);
+    // A cell list of the placed particles, cells at least one bounding diameter wide.
+    let cells = ((l / (2.0 * radius + gap)).floor() as usize).max(1);
+    let cell_of = |p: Vector| -> [usize; 3] { std::array::from_fn(|d| ((p[d] / l * cells as Real) as usize).min(cells - 1)) };
+    let mut grid: Vec<Vec<usize>> = vec![Vec::new(); cells * cells * cells];
+    let index = |c: [usize; 3]| (c[2] * cells + c[1]) * cells + c[0];
+    let tries = 200_000;
+    for _ in 0..n {
+        let mut done = false;
+        for _ in 0..tries {
+            let centre = Vector::new(rng.random::<Real>() * l, rng.random::<Real>() * l, rng.random::<Real>() * l);
+            let rotation = match case.shape {
+                ParticleShape::Sphere => Rotation::IDENTITY,
+                ParticleShape::Cube => {
+                    let q = [0; 4].map(|_| rng.random::<Real>() * 2.0 - 1.0);
+                    Rotation::from_xyzw(q[0], q[1], q[2], q[3]).normalize()
+                }
+            };
+            let pose = Pose::from_parts(centre, rotation);
+            let c = cell_of(centre);
+            let span = |d: usize| -> Vec<usize> {
+                let mut v: Vec<usize> = [-1i64, 0, 1].iter().map(|o| (c[d] as i64 + o).rem_euclid(cells as i64) as usize).collect();
+                v.sort_unstable();
+                v.dedup();
+                v
+            };
+            let free = span(2).iter().all(|&z| {
+                span(1).iter().all(|&y| {
+                    span(0).iter().all(|&x| {
+                        grid[index([x, y, z])].iter().all(|&j| {
+                            let mut other = placed[j];
+                            other.translation += domain.nearest_image_shift(centre, other.translation);
+                            let d = (other.translation - centre).length();
+                            d > 2.0 * radius + gap
+                                || (case.shape == ParticleShape::Cube
+                                    && query::distance(&pose, shape.as_ref(), &other, shape.as_ref()).is_ok_and(|d| d.distance > gap))
+                        })
+                    })
+                })
+            });
+            if free {
+                grid[index(c)].push(placed.len());
+                placed.push(pose);
+                done = true;
+                break;
+            }
+        }
+        if !done {
+            return Err(Error::InvalidParameter {
+                name: "volume_fraction",
+                value: case.volume_fraction,
+                allowed: "a fraction random sequential addition reaches (placement found no free spot)",
+            });
+        }
+    }
+    Ok(placed)
+}
+
+fn particle_shape(case: &HinderedSettling) -> SharedShape {
+    match case.shape {
+        ParticleShape::Sphere => SharedShape::ball(0.5 * case.diameter),
+        ParticleShape::Cube => {
+            let half = 0.5 * case.diameter * (std::f64::consts::PI / 6.0).cbrt();
+            SharedShape::cuboid(half, half, half)
+        }
+    }
+}
+
+/// Progress of a running case.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress<'a> {
+    /// Steps done and planned.
+    pub step: u64,
+    /// Steps planned.
+    pub steps: u64,
+    /// What the last step did.
+    pub report: &'a FluidStepReport,
+    /// Latest `⟨v⟩/v_s`.
+    pub v_over_vs: Real,
+}
+
+/// Runs `case`, calling `progress` after every step.
+pub fn run(case: &HinderedSettling, mut progress: impl FnMut(Progress<'_>)) -> Result<SettlingResult> {
+    case.check()?;
+    let start = Instant::now();
+    let n = case.particle_count();
+    let poses = place_particles(case, n)?;
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::new(0.0, 0.0, -G);
+    // Rapier's broad phase sizes its margins by `length_unit` (1 m by default): left at 1 m
+    // for millimetre particles it pairs every body with every other (1.9 M pairs, seconds per
+    // step, for the 30 % peer case).
+    world.integration_parameters.length_unit = case.diameter;
+    let density = case.density_ratio * case.fluid_density;
+    let shape = particle_shape(case);
+    let mut particles: Vec<(RigidBodyHandle, ColliderHandle)> = Vec::with_capacity(n);
+    for pose in &poses {
+        let b = world.insert_body(RigidBodyBuilder::dynamic().pose(*pose).can_sleep(false));
+        let mut collider = ColliderBuilder::new(shape.clone()).density(density);
+        if !case.contacts {
+            // No contact of any kind: particles pass through each other (rapier's own
+            // contacts would otherwise act).
+            collider = collider.collision_groups(InteractionGroups::none());
+        }
+        let c = world.insert_collider(collider, Some(b));
+        particles.push((b, c));
+    }
+    let l = case.box_length();
+    let dx = case.dx();
+    let settings =
+        FluidSettings::new(dx, case.dt(), case.viscosity(), case.fluid_density)?.with_smoothing(case.smoothing_cells * dx)?;
+    let mut fluid = Fluid::new(Vector::ZERO, Vector::splat(l), [true; 3], settings)?;
+    for &(_, c) in &particles {
+        fluid.couple(&world, c)?;
+    }
+    fluid.balance_weight(&world)?;
+    let mut contacts = if case.contacts {
+        let half = 0.5 * case.enlargement_cells * dx;
+        let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?;
+        let mut c = DiscreteContacts::new(overlap, case.restitution)?
+            .with_friction(case.friction)
+            .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 })
+            .with_periodic(fluid.periodic_box().expect("a triply periodic fluid"));
+        for &(_, h) in &particles {
+            c.handle(&mut world, h, case.material)?;
+        }
+        Some(c)
+    } else {
+        None
+    };
+
+    let volume = shape.mass_properties(1.0).mass();
+    let (v_s, phi) = (case.terminal_velocity(), case.volume_fraction);
+    let steps = case.steps();
+    // About 400 samples, at most one per 10 steps (the fluid's mean is a sweep of its own).
+    let sample_every = (steps / 400).max(10);
+    let setup_time = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let mut out = SettlingResult { particles: n, steps, cells: fluid.lattice().cells(), setup_time, ..Default::default() };
+    let mut latest = 0.0;
+    for step in 1..=steps {
+        let report = fluid.step(&mut world, contacts.as_mut())?;
+        out.seconds.mapping += report.seconds.mapping;
+        out.seconds.lattice += report.seconds.lattice;
+        out.seconds.bodies += report.seconds.bodies;
+        out.max_contacts = out.max_contacts.max(report.contacts.map_or(0, |c| c.contacts));
+        if step % sample_every == 0 || step == steps {
+            // Zero-volume-flux frame: ⟨v⟩ = (1 − φ)(⟨v_p⟩ − ⟨u_f⟩), the fluid's mean from the
+            // lattice's (all nodes) less the nodes inside particles.
+            let vp = particles.iter().map(|&(b, _)| world.bodies[b].linvel().z).sum::<Real>() / n as Real;
+            let v_box = l.powi(3);
+            let v_solid = n as Real * volume;
+            let u_f = (fluid.mean_velocity().z * v_box - vp * v_solid) / (v_box - v_solid);
+            latest = -(1.0 - phi) * (vp - u_f) / v_s;
+            out.samples.push((step as Real * case.dt(), latest));
+        }
+        progress(Progress { step, steps, report: &report, v_over_vs: latest });
+    }
+    let from = case.averaging_start * steps as Real * case.dt();
+    let tail: Vec<Real> = out.samples.iter().filter(|s| s.0 >= from).map(|s| s.1).collect();
+    out.v_mean_over_vs = tail.iter().sum::<Real>() / tail.len().max(1) as Real;
+    out.wall_time = start.elapsed().as_secs_f64();
+    Ok(out)
+}

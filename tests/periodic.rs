@@ -1,0 +1,139 @@
+//! Periodic boundaries: bodies crossing faces, contacts across them, the fluid's forces on a
+//! body that straddles them, and thread-count independence of a periodic wet run.
+
+use discrete_contact::coupling::{Fluid, FluidSettings};
+use discrete_contact::math::{Real, Vector};
+use discrete_contact::periodic::PeriodicBox;
+use discrete_contact::prelude::*;
+use discrete_contact::rapier::DiscreteContacts;
+use discrete_contact::rapier3d_f64::prelude::*;
+use discrete_contact::validation::hindered_settling::{run, HinderedSettling, ParticleShape};
+
+const L: Real = 0.1;
+const R: Real = 0.01;
+
+/// Two steel-density balls in a periodic box without gravity, soft enough that a contact lasts
+/// many steps.
+fn two_balls(a: Vector, b: Vector, va: Vector) -> (PhysicsWorld, DiscreteContacts, [RigidBodyHandle; 2], [ColliderHandle; 2]) {
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::ZERO;
+    world.integration_parameters.dt = 1e-4;
+    world.integration_parameters.length_unit = R;
+    let mut bodies = [RigidBodyHandle::invalid(); 2];
+    let mut colliders = [ColliderHandle::invalid(); 2];
+    for (k, (p, v)) in [(a, va), (b, Vector::ZERO)].into_iter().enumerate() {
+        bodies[k] = world.insert_body(RigidBodyBuilder::dynamic().translation(p).linvel(v));
+        colliders[k] = world.insert_collider(ColliderBuilder::ball(R).density(7800.0), Some(bodies[k]));
+    }
+    let domain = PeriodicBox::new(Vector::ZERO, Vector::splat(L), [true; 3]).unwrap();
+    let mut contacts = DiscreteContacts::new(OverlapSettings::new(6, IntegrationMode::Subcell).unwrap(), 0.95).unwrap().with_periodic(domain);
+    for c in colliders {
+        contacts.handle(&mut world, c, Material::new(1e6, 0.3).unwrap()).unwrap();
+    }
+    (world, contacts, bodies, colliders)
+}
+
+fn momentum(world: &PhysicsWorld, bodies: &[RigidBodyHandle]) -> Vector {
+    bodies.iter().map(|&b| world.bodies[b].linvel() * world.bodies[b].mass()).sum()
+}
+
+#[test]
+fn a_body_crossing_a_periodic_face_keeps_its_momentum_and_its_contact() {
+    // A at x = 97 mm runs at 1 m/s into B, whose image touches it through the face x = L.
+    let a = Vector::new(0.097, 0.05, 0.05);
+    let b = Vector::new(0.097 + 2.0 * R - 2e-4 - L, 0.05, 0.05);
+    let (mut world, mut contacts, bodies, colliders) = two_balls(a, b, Vector::X);
+    contacts.step(&mut world).unwrap();
+    assert_eq!(contacts.contact_count(), 1, "the contact through the face is found");
+    let p0 = momentum(&world, &bodies);
+    let damping = contacts.contact(colliders[0], colliders[1]).unwrap().damping;
+    let mut wrapped_in_contact = false;
+    for _ in 0..400 {
+        contacts.step(&mut world).unwrap();
+        let x = world.bodies[bodies[0]].translation().x;
+        assert!((0.0..L).contains(&x), "A stays in the box: x = {x}");
+        if let Some(s) = contacts.contact(colliders[0], colliders[1]) {
+            assert_eq!(s.damping, damping, "the contact keeps its damping");
+            wrapped_in_contact |= x < 0.05;
+        }
+        let p = momentum(&world, &bodies);
+        assert!((p - p0).length() < 1e-12 * p0.length().max(1.0) + 1e-12, "momentum {p:?} vs {p0:?}");
+    }
+    assert!(wrapped_in_contact, "A was moved back through x = L while the contact lasted");
+    assert_eq!(contacts.contact_count(), 0, "the bodies have parted");
+    // Equal masses, e = 0.95: B leaves with about (1 + e)/2 of A's speed.
+    let vb = world.bodies[bodies[1]].linvel().x;
+    assert!((vb - 0.975).abs() < 0.03, "B leaves at {vb} m/s");
+}
+
+#[test]
+fn bodies_touching_across_a_corner_feel_equal_and_opposite_forces_as_inside_the_box() {
+    // The same touching pair once across the corner (x, y faces) and once in the middle of the
+    // box: the impulses of one step agree and are equal and opposite.
+    let offset = Vector::new(2.0, 0.3, 0.2).normalize() * (2.0 * R - 3e-4);
+    let mut dv = Vec::new();
+    for a in [Vector::new(L - 0.004, L - 0.002, 0.05), Vector::new(0.05, 0.05, 0.05)] {
+        let b = a + offset;
+        let wrapped = b - Vector::new((b.x / L).floor() * L, (b.y / L).floor() * L, 0.0);
+        let (mut world, mut contacts, bodies, _) = two_balls(a, wrapped, Vector::new(0.2, -0.1, 0.05));
+        let v0: Vec<Vector> = bodies.iter().map(|&h| world.bodies[h].linvel()).collect();
+        contacts.step(&mut world).unwrap();
+        let m: Vec<Real> = bodies.iter().map(|&h| world.bodies[h].mass()).collect();
+        let impulse: Vec<Vector> = (0..2).map(|k| (world.bodies[bodies[k]].linvel() - v0[k]) * m[k]).collect();
+        assert!(impulse[0].length() > 0.0, "the pair touches");
+        assert!((impulse[0] + impulse[1]).length() <= 1e-12 * impulse[0].length(), "F_AB = -F_BA: {impulse:?}");
+        dv.push(impulse[0]);
+    }
+    assert!((dv[0] - dv[1]).length() <= 1e-9 * dv[1].length(), "across the corner {:?} vs inside {:?}", dv[0], dv[1]);
+}
+
+#[test]
+fn the_fluid_acts_on_a_body_across_periodic_faces_as_inside_the_box() {
+    // A spinning, moving ball in a triply periodic fluid, once in the middle and once shifted
+    // by half the box so that it straddles all three faces: the lattice is the same up to a
+    // periodic shift, so force and torque must agree (the moment uses lever arms, not
+    // wrapped node positions).
+    let dx = 1e-3;
+    let n = 16.0;
+    let mut results = Vec::new();
+    for shift in [0.0, 0.5 * n * dx] {
+        let mut world = PhysicsWorld::new();
+        world.gravity = Vector::ZERO;
+        let centre = Vector::splat(0.5 * n * dx + shift);
+        let b = world.insert_body(RigidBodyBuilder::dynamic().translation(centre).linvel(Vector::new(0.01, 0.0, 0.0)).angvel(Vector::new(0.0, 0.0, 5.0)));
+        let c = world.insert_collider(ColliderBuilder::ball(3e-3).density(2000.0), Some(b));
+        let settings = FluidSettings::new(dx, 1e-4, 1e-6, 1000.0).unwrap();
+        let mut fluid = Fluid::new(Vector::ZERO, Vector::splat(n * dx), [true; 3], settings).unwrap();
+        fluid.couple(&world, c).unwrap();
+        let mut history = Vec::new();
+        for _ in 0..10 {
+            fluid.step(&mut world, None).unwrap();
+            history.push(fluid.hydrodynamic_force(c).unwrap());
+        }
+        results.push(history);
+    }
+    let total = |h: &[(Vector, Vector)]| h.iter().fold((Vector::ZERO, Vector::ZERO), |a, s| (a.0 + s.0, a.1 + s.1));
+    let (f, t) = total(&results[0]);
+    assert!(f.x < 0.0 && t.z < 0.0, "the fluid brakes the motion and the spin: {f:?}, {t:?}");
+    for ((f0, t0), (f1, t1)) in results[0].iter().zip(&results[1]) {
+        assert!((*f0 - *f1).length() <= 1e-9 * f.length(), "force {f0:?} vs {f1:?}");
+        assert!((*t0 - *t1).length() <= 1e-9 * t.length(), "torque {t0:?} vs {t1:?}");
+    }
+}
+
+#[test]
+fn a_periodic_wet_run_gives_the_same_result_on_one_and_two_threads() {
+    let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, 0.3, 1000.0).unwrap();
+    case.nodes_per_diameter = 6.0;
+    case.box_nodes = 24;
+    case.duration = 400.0 * case.dt() * case.stokes_velocity() / case.diameter;
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| run(&case, |_| {}).unwrap())
+    };
+    let (one, two) = (on(1), on(2));
+    assert!(one.max_contacts > 0, "the run has contacts");
+    assert!(one.samples.len() >= 5);
+    assert_eq!(one.samples, two.samples, "⟨v⟩/v_s over time");
+    assert!(one.samples.iter().all(|s| s.1.is_finite()));
+}
