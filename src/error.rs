@@ -58,7 +58,7 @@ pub enum Error {
     /// An impact too energetic for the bodies' materials: Hertz theory puts the deepest
     /// indentation beyond what an overlap of these bodies can represent (they would pass
     /// through each other).
-    #[error("contact between {pair} too soft for its impact speed {speed:e} m/s: expected indentation {indentation:e} m exceeds half the smaller body's size ({limit:e} m); use a stiffer material or a lower speed")]
+    #[error("contact between {pair} too soft for its impact speed {speed:e} m/s: expected indentation {indentation:e} m exceeds the limit for the smaller body ({limit:e} m); use a stiffer material or a lower speed, or raise the limit (DiscreteContacts::with_indentation_limit)")]
     ContactTooSoft {
         /// Which pair, in words.
         pair: String,

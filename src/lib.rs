@@ -49,12 +49,47 @@
 //!   (or the number set with `with_substeps_per_contact`) within its Hertz contact time under
 //!   the chosen policy; the message names the pair, the
 //!   recommended step and the sub-steps needed. Lower `dt` or allow more sub-steps.
-//! - [`Error::ContactTooSoft`] — (rapier drop-in) Hertz puts an impact's indentation beyond half
-//!   the smaller body: the bodies would pass through each other. Use a stiffer material or a
-//!   lower speed.
+//! - [`Error::ContactTooSoft`] — (rapier drop-in) Hertz puts an impact's indentation beyond
+//!   the limit (half the smaller body's smallest half-extent by default): the bodies would
+//!   pass through each other. Use a stiffer material or a lower speed; deliberately softened
+//!   materials raise the limit with `DiscreteContacts::with_indentation_limit`.
+//! - [`Error::InvalidParameter`] with `periodic box size` — a periodic box shorter than twice a
+//!   pair's reach (two bounding diameters plus the contact margin): a body would meet two
+//!   images of another. Enlarge the box.
 //! - `Error::Fluid` — (feature `fluid`) the lattice refused a parameter (e.g. `τ <= 1/2`: raise
 //!   `Δt` or `ν`, or lower `Δx`), blew up (the message names the step and the node: lower the
 //!   lattice velocity with a smaller `Δt`, or raise `τ`), or could not write a file.
+
+//!
+//! ## Periodic boxes
+//! [`periodic::PeriodicBox`] given to `DiscreteContacts::with_periodic` (from
+//! `Fluid::periodic_box` in a wet run) makes contacts act through periodic faces and moves
+//! bodies that leave the box back into it; a scene without it pays nothing for periodicity.
+//!
+//! ## Past one machine (design note, not yet code)
+//! Everything parallel here is already decomposed the way a distributed run needs it:
+//! - **Lattice**: the sweep runs per z-slab; with MPI each rank owns a block of slabs (or a 3-D
+//!   block for many ranks) plus one ghost layer per face. The A-A pattern streams in place, so
+//!   after each step a rank sends its neighbour only the populations that cross the shared face
+//!   (5 of the 19 per face node for D3Q19; edges for 3-D blocks) — one message per neighbour
+//!   and step, overlapped with the interior sweep.
+//! - **Particles**: each particle is owned by the rank whose block holds its centre of mass
+//!   (the rule that already decides where a body lives in a periodic box). Ranks that its
+//!   bounding box plus the smoothing band reaches get a ghost copy (pose, velocities) each step
+//!   and write its `d_B`; after the lattice step they send their partial force and moment —
+//!   moments are summed from per-node lever arms, so partial sums add up wherever they were
+//!   taken — to the owner, which adds them in rank order (results independent of the rank
+//!   count, as they are of the thread count now).
+//! - **Contacts**: a pair is evaluated once, by the owner of the particle that comes first
+//!   (as a contact through a periodic face is evaluated on the first body's side), against a
+//!   ghost of the other within reach (bounding radii + enlargement + distance travelled in a
+//!   step); the reaction goes back to the other's owner. A persistent contact's state (damping,
+//!   reference speed, box in a body frame) travels with it when its first particle changes
+//!   rank.
+//! - **Messages per step**: particle migration and ghosts, lattice halo, partial hydrodynamic
+//!   forces, contact reactions — all between neighbours; the only global operations are the
+//!   balance force's net weight (once) and diagnostics such as the mean settling velocity.
+//!   Each rank keeps its own rapier world of owned bodies plus kinematic ghosts.
 
 #![warn(missing_docs)]
 

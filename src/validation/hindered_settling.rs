@@ -365,6 +365,8 @@ pub fn run(case: &HinderedSettling, mut progress: impl FnMut(Progress<'_>)) -> R
         let mut c = DiscreteContacts::new(overlap, case.restitution)?
             .with_friction(case.friction)
             .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 })
+            // E = 5 kPa: a head-on collision at the settling speed indents ~30 % of D (Hertz).
+            .with_indentation_limit(1.0)?
             .with_periodic(fluid.periodic_box().expect("a triply periodic fluid"));
         for &(_, h) in &particles {
             c.handle(&mut world, h, case.material)?;
