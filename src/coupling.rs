@@ -351,7 +351,7 @@ impl Fluid {
         }
         let [nx, ny, nz] = self.lattice.dims();
         let periodic = self.domain.periodic();
-        let fluid_cells = [nx, ny, nz].iter().zip(periodic).map(|(&n, p)| if p { n } else { n - 2 } as Real).product::<Real>();
+        let fluid_cells = [nx, ny, nz].iter().zip(periodic).map(|(&n, p)| (if p { n } else { n - 2 }) as Real).product::<Real>();
         let a = -weight / (rho * fluid_cells * self.units.dx().powi(3));
         crate::error::check_finite_vec("balance acceleration", a)?;
         self.lattice.set_body_acceleration(a.to_array().map(|c| self.units.acceleration_to_lattice(c)));

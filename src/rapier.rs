@@ -531,7 +531,8 @@ impl DiscreteContacts {
             let e_star = effective_modulus(&ha.material, &hb.material);
             // Relative speed bound: centre speeds plus rim speeds of the bounded bodies.
             let rim = |k: &BodyKinematics, r: Real| if r.is_finite() { k.angvel.length() * r } else { 0.0 };
-            let v0 = ((ka.linvel - kb.linvel).length() + rim(&ka, ha.radius) + rim(&kb, hb.radius)).max(1e-3);
+            let rims = rim(&ka, ha.radius) + rim(&kb, hb.radius);
+            let v0 = ((ka.linvel - kb.linvel).length() + rims).max(1e-3);
             let t_h = 2.87 * (m_star * m_star / (r_star * e_star * e_star * v0)).powf(0.2);
             // Hertz's deepest indentation, from the speed along the line from A to B (a body
             // sliding past another does not indent it); beyond the limit the bodies pass through.
@@ -547,7 +548,7 @@ impl DiscreteContacts {
             let v_normal = if towards_b == Vector::ZERO {
                 v0
             } else {
-                ((ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rim(&ka, ha.radius) + rim(&kb, hb.radius)).max(1e-3)
+                ((ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rims).max(1e-3)
             };
             let depth = (15.0 * m_star * v_normal * v_normal / (16.0 * e_star * r_star.sqrt())).powf(0.4);
             let limit = self.indentation_limit * ha.half_size.min(hb.half_size);

@@ -137,3 +137,33 @@ fn a_periodic_wet_run_gives_the_same_result_on_one_and_two_threads() {
     assert_eq!(one.samples, two.samples, "⟨v⟩/v_s over time");
     assert!(one.samples.iter().all(|s| s.1.is_finite()));
 }
+
+#[test]
+fn bad_periodic_and_settling_input_is_refused_by_name() {
+    let name = |e: discrete_contact::Error| match e {
+        discrete_contact::Error::InvalidParameter { name, .. } => name,
+        other => panic!("not an InvalidParameter: {other}"),
+    };
+    let e = PeriodicBox::new(Vector::ZERO, Vector::new(1.0, 0.0, 1.0), [true; 3]).unwrap_err();
+    assert_eq!(name(e), "periodic box size (max - min)");
+    let e = PeriodicBox::new(Vector::splat(Real::NAN), Vector::ONE, [true; 3]).unwrap_err();
+    assert!(matches!(e, discrete_contact::Error::NonFinite { .. } | discrete_contact::Error::InvalidParameter { .. }));
+    for f in [0.0, -1.0, 1.5, Real::NAN] {
+        assert_eq!(contacts_limit(f).err().map(name), Some("indentation_limit"));
+    }
+    let base = HinderedSettling::seed_002(ParticleShape::Sphere, 0.1, 1000.0).unwrap();
+    let refused = |change: &dyn Fn(&mut HinderedSettling), expected: &str| {
+        let mut c = base.clone();
+        change(&mut c);
+        assert_eq!(name(run(&c, |_| {}).unwrap_err()), expected);
+    };
+    refused(&|c| c.volume_fraction = 0.5, "volume_fraction");
+    refused(&|c| c.volume_fraction = 1e-9, "volume_fraction");
+    refused(&|c| c.archimedes = -1.0, "archimedes");
+    refused(&|c| c.nodes_per_diameter = Real::NAN, "nodes_per_diameter");
+    refused(&|c| c.density_ratio = 0.5, "density_ratio");
+}
+
+fn contacts_limit(f: Real) -> discrete_contact::Result<DiscreteContacts> {
+    DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9).unwrap().with_indentation_limit(f)
+}

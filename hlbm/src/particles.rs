@@ -53,13 +53,7 @@ impl ParticleField {
         let row = &mut self.rows[z * self.ny + y];
         let node = ParticleNode { x: x as u32, d_b, velocity, arm, id };
         match row.binary_search_by_key(&(x as u32), |n| n.x) {
-            Ok(i) => {
-                let o = row[i];
-                let w = o.d_b + d_b;
-                let v = [0, 1, 2].map(|d| (o.velocity[d] * o.d_b + velocity[d] * d_b) / w);
-                let (arm, id) = if d_b > o.d_b { (arm, id) } else { (o.arm, o.id) };
-                row[i] = ParticleNode { x: x as u32, d_b: o.d_b.max(d_b), velocity: v, arm, id };
-            }
+            Ok(i) => superpose(&mut row[i], &node),
             Err(i) => {
                 row.insert(i, node);
                 self.count += 1;
@@ -87,17 +81,8 @@ impl ParticleField {
                 let mut count = 0;
                 for row in slab.iter_mut() {
                     row.sort_by_key(|n| n.x);
-                    row.dedup_by(|later, kept| {
-                        if later.x != kept.x {
-                            return false;
-                        }
-                        let w = kept.d_b + later.d_b;
-                        let v = [0, 1, 2].map(|d| (kept.velocity[d] * kept.d_b + later.velocity[d] * later.d_b) / w);
-                        if later.d_b > kept.d_b {
-                            (kept.arm, kept.id) = (later.arm, later.id);
-                        }
-                        kept.d_b = kept.d_b.max(later.d_b);
-                        kept.velocity = v;
+                    row.dedup_by(|later, kept| later.x == kept.x && {
+                        superpose(kept, later);
                         true
                     });
                     count += row.len();
@@ -122,6 +107,16 @@ impl ParticleField {
     /// Whether no node is covered.
     pub fn is_empty(&self) -> bool {
         self.count == 0
+    }
+}
+
+/// Two particles on one node: the larger `d_B` is kept with its particle's id and lever arm
+/// (the force goes to that particle), the velocity is the `d_B`-weighted mean.
+fn superpose(kept: &mut ParticleNode, later: &ParticleNode) {
+    let w = kept.d_b + later.d_b;
+    kept.velocity = [0, 1, 2].map(|d| (kept.velocity[d] * kept.d_b + later.velocity[d] * later.d_b) / w);
+    if later.d_b > kept.d_b {
+        (kept.d_b, kept.arm, kept.id) = (later.d_b, later.arm, later.id);
     }
 }
 

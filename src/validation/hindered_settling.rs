@@ -195,6 +195,18 @@ impl HinderedSettling {
         if !(self.duration > 0.0 && self.duration.is_finite()) {
             return bad("duration", self.duration, "> 0 (in D/U)");
         }
+        if !(self.archimedes > 0.0 && self.archimedes.is_finite()) {
+            return bad("archimedes", self.archimedes, "> 0, finite");
+        }
+        if !(self.diameter > 0.0 && self.diameter.is_finite()) {
+            return bad("diameter", self.diameter, "> 0 m, finite");
+        }
+        if !(self.nodes_per_diameter >= 2.0 && self.nodes_per_diameter.is_finite()) {
+            return bad("nodes_per_diameter", self.nodes_per_diameter, ">= 2 lattice nodes per diameter");
+        }
+        if self.particle_count() == 0 {
+            return bad("volume_fraction", self.volume_fraction, "enough for at least one particle in the box (or a larger box_nodes)");
+        }
         Ok(())
     }
 }
@@ -237,6 +249,7 @@ impl SettlingResult {
 /// Random non-overlapping poses of `n` particles in the periodic box (random sequential
 /// addition, gap at least a quarter `Δx` so no contact starts at once).
 pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
+    case.check()?;
     let l = case.box_length();
     let domain = PeriodicBox::new(Vector::ZERO, Vector::splat(l), [true; 3])?;
     let shape = particle_shape(case);
@@ -314,7 +327,7 @@ fn particle_shape(case: &HinderedSettling) -> SharedShape {
 /// Progress of a running case.
 #[derive(Clone, Copy, Debug)]
 pub struct Progress<'a> {
-    /// Steps done and planned.
+    /// Steps done.
     pub step: u64,
     /// Steps planned.
     pub steps: u64,
