@@ -76,9 +76,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
 fn plot(path: &std::path::Path, rows: &[Row]) -> Result<(), Box<dyn std::error::Error>> {
     common::register_fonts();
-    let tmp = path.with_extension("tmp.png");
-    {
-        let root = BitMapBackend::new(&tmp, (1400, 600)).into_drawing_area();
+    discrete_contact::io::replace_atomically(path, |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::new(tmp, (1400, 600)).into_drawing_area();
         root.fill(&WHITE)?;
         let panels = root.split_evenly((1, 2));
         for (k, area) in panels.iter().enumerate() {
@@ -101,7 +100,6 @@ fn plot(path: &std::path::Path, rows: &[Row]) -> Result<(), Box<dyn std::error::
             ch.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 13)).position(if k == 0 { SeriesLabelPosition::UpperLeft } else { SeriesLabelPosition::LowerLeft }).draw()?;
         }
         root.present()?;
-    }
-    std::fs::rename(&tmp, path)?;
-    Ok(())
+        Ok(())
+    })
 }

@@ -115,9 +115,8 @@ type Summary = (IntegrationMode, usize, f64, f64, f64);
 
 fn plot(path: &std::path::Path, cases: &[HertzCase], ds: &[f64], runs: &[Run], summary: &[Summary]) -> Result<(), Box<dyn std::error::Error>> {
     common::register_fonts();
-    let tmp = path.with_extension("tmp.png");
-    {
-        let root = BitMapBackend::new(&tmp, (1800, 1350)).into_drawing_area();
+    discrete_contact::io::replace_atomically(path, |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::new(tmp, (1800, 1350)).into_drawing_area();
         root.fill(&WHITE)?;
         let (top, bottom) = root.split_vertically(820);
         let panels = top.split_evenly((2, 4));
@@ -171,7 +170,6 @@ fn plot(path: &std::path::Path, cases: &[HertzCase], ds: &[f64], runs: &[Run], s
         }
         ch.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 14)).position(SeriesLabelPosition::UpperRight).draw()?;
         root.present()?;
-    }
-    std::fs::rename(&tmp, path)?;
-    Ok(())
+        Ok(())
+    })
 }

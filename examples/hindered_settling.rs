@@ -12,6 +12,11 @@
 //! U the Stokes velocity), `--tau 0.55`, `--no-compare` (skip the runs without contacts),
 //! `--peer-steps 100`, `--youngs` (Pa; 5 kPa, 50 kPa with `--quick`).
 //!
+//! Long runs: `--checkpoint-every N` saves each case every N steps (and when it ends) to
+//! `target/validation/checkpoints/`; after a stop, the same command with `--resume` goes on
+//! from there with bit-identical results (finished cases are not run again). A checkpoint
+//! holds the whole lattice: ~150 bytes per node (375 MB at 135³).
+//!
 //! Writes `target/validation/hindered_settling.csv`
 //! (`shape,phi,ar,n_particles,v_mean_over_vs,richardson_zaki,garside_al_dibouni,with_contacts,wall_time_s,mlups`),
 //! `hindered_settling_series.csv` (⟨v⟩/v_s over time), `hindered_settling.png`, and for the
@@ -22,7 +27,9 @@ mod common;
 
 use std::time::Instant;
 
-use discrete_contact::validation::hindered_settling::{run, HinderedSettling, ParticleShape, SettlingResult};
+use std::path::PathBuf;
+
+use discrete_contact::validation::hindered_settling::{HinderedSettling, ParticleShape, SettlingResult, SettlingRun};
 use plotters::prelude::*;
 
 /// One finished run.
@@ -112,7 +119,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             case.terminal_velocity(),
             case.reynolds()
         );
-        let result = run_with_progress(&case)?;
+        let result = run_with_progress(&case, &common::Checkpoints::from_args(&args, &dir))?;
         println!(
             "  ⟨v⟩/v_s = {:.3} (Richardson–Zaki {:.3}, Garside–Al-Dibouni {:.3}); {:.1} s, {:.1} MLUPs; time in lattice {:.0} %, mapping {:.0} %, bodies + contacts {:.0} %; at most {} contacts",
             result.v_mean_over_vs,
@@ -195,27 +202,48 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// Runs a case with a progress line every 5 s.
-fn run_with_progress(case: &HinderedSettling) -> Result<SettlingResult, discrete_contact::Error> {
+/// A case's checkpoint file (the file also holds the whole case and refuses another).
+fn checkpoint_path(checkpoints: &common::Checkpoints, case: &HinderedSettling) -> PathBuf {
+    let contacts = if case.contacts { "contacts" } else { "no_contacts" };
+    checkpoints.file(&format!("hindered_settling_{}_phi{}_ar{}_{contacts}", case.shape.name(), case.volume_fraction, case.archimedes))
+}
+
+/// Runs a case (from its checkpoint with `--resume`) with a progress line every 5 s.
+fn run_with_progress(case: &HinderedSettling, checkpoints: &common::Checkpoints) -> Result<SettlingResult, discrete_contact::Error> {
+    let path = checkpoint_path(checkpoints, case);
+    let mut run = if checkpoints.resumable(&path) {
+        let run = SettlingRun::load(&path, case)?;
+        println!("  resumed from {} at step {}", path.display(), run.steps_done());
+        run
+    } else {
+        SettlingRun::new(case)?
+    };
     let start = Instant::now();
+    let (first, steps) = (run.steps_done(), case.steps());
     let mut last = 0.0;
     let cells = (case.box_nodes as f64).powi(3);
-    run(case, |p| {
+    while !run.is_done() {
+        let report = run.step()?;
+        let step = run.steps_done();
+        if checkpoints.due(step) || (step == steps && checkpoints.every.is_some()) {
+            let saving = Instant::now();
+            run.save(&path)?;
+            println!("  step {step:>6}: saved {} ({:.1} s)", path.display(), saving.elapsed().as_secs_f64());
+        }
         let el = start.elapsed().as_secs_f64();
         if el - last > 5.0 {
             last = el;
-            let contacts = p.report.contacts.map_or(0, |c| c.contacts);
+            let contacts = report.contacts.map_or(0, |c| c.contacts);
+            let done = (step - first) as f64;
             println!(
-                "  step {:>6}/{}  ⟨v⟩/v_s = {:.3}  {} contacts  {:.1} MLUPs  ETA {:.0} s",
-                p.step,
-                p.steps,
-                p.v_over_vs,
-                contacts,
-                p.step as f64 * cells / el / 1e6,
-                el * (p.steps as f64 / p.step as f64 - 1.0)
+                "  step {step:>6}/{steps}  ⟨v⟩/v_s = {:.3}  {contacts} contacts  {:.1} MLUPs  ETA {:.0} s",
+                run.latest(),
+                done * cells / el / 1e6,
+                el * ((steps - first) as f64 / done - 1.0)
             );
         }
-    })
+    }
+    Ok(run.finish())
 }
 
 /// The peer case (seed 002's study as in its authors' public example): 15 D box, D = 9 Δx,
@@ -230,7 +258,7 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
             let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, phi, 1000.0)?;
             case.contacts = contacts;
             case.duration = steps as f64 * case.dt() * case.stokes_velocity() / case.diameter;
-            let r = run_with_progress(&case)?;
+            let r = run_with_progress(&case, &common::Checkpoints::default())?;
             let openlb = if contacts { openlb_with } else { openlb_without };
             println!(
                 "{:>5} {:>6} {:>9} {:>8.3} {:>9.2} {:>8.2} {:>9.1}× {:>8.3}   (lattice {:.0} %, mapping {:.0} %, bodies + contacts {:.0} %)",
@@ -274,9 +302,8 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
 /// ⟨v⟩/v_s against φ with both correlations (Ar of the first run), with and without contacts.
 fn plot(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::error::Error>> {
     common::register_fonts();
-    let tmp = path.with_extension("tmp.png");
-    {
-        let root = BitMapBackend::new(&tmp, (1000, 700)).into_drawing_area();
+    discrete_contact::io::replace_atomically(path, |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::new(tmp, (1000, 700)).into_drawing_area();
         root.fill(&WHITE)?;
         let mut ch = ChartBuilder::on(&root)
             .caption("Hindered settling in a triply periodic box", ("sans-serif", 24))
@@ -341,7 +368,6 @@ fn plot(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::error::
         }
         ch.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 13)).position(SeriesLabelPosition::UpperRight).draw()?;
         root.present()?;
-    }
-    std::fs::rename(&tmp, path)?;
-    Ok(())
+        Ok(())
+    })
 }

@@ -11,7 +11,9 @@
 //! (mm), `--rho-p 7780`, `--rho-f 1230` (kg/m³), `--mu 0.0502` (Pa s), `--box 42,42,50` (mm),
 //! `--e-dry 0.97`, `--nc 16`, `--t-end 0.25` (s), `--dt-us` (fluid step; default keeps the
 //! paper's τ = 7.3), `--vtk-every-ms` (ParaView snapshots), `--no-compare` (skip the runs
-//! without contact).
+//! without contact), `--checkpoint-every N` (save each run every N steps to
+//! `target/validation/checkpoints/`) and `--resume` (go on from those files after a stop, with
+//! bit-identical results).
 //!
 //! Writes `target/validation/wet_rebound.csv` (`h0_mm,dx_mm,t_s,gap_mm`, with contact),
 //! `wet_rebound_no_contact.csv` (same columns), `wet_rebound_summary.csv` and
@@ -23,7 +25,7 @@ mod common;
 use std::time::Instant;
 
 use discrete_contact::math::Vector;
-use discrete_contact::validation::wet_rebound::{run, Trajectory, WetRebound};
+use discrete_contact::validation::wet_rebound::{ReboundRun, Trajectory, WetRebound};
 use plotters::prelude::*;
 
 /// One finished run.
@@ -84,6 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let dir = common::output_dir();
+    let checkpoints = common::Checkpoints::from_args(&args, &dir);
     let mut runs = Vec::new();
     for (h0, dx, contact) in jobs {
         let case = case_for(h0, dx, contact);
@@ -93,13 +96,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut last_print = 0.0;
         let mut next_vtk = 0.0;
         let steps_max = (case.end_time / case.dt).ceil();
-        let traj = run(&case, |tr, fluid| {
+        let path = checkpoints.file(&format!("wet_rebound_h{h0}_dx{dx}_{}", if contact { "contact" } else { "no_contact" }));
+        let mut run = if checkpoints.resumable(&path) {
+            let run = ReboundRun::load(&path, &case)?;
+            println!("  resumed from {} at step {}", path.display(), run.trajectory().steps);
+            run
+        } else {
+            ReboundRun::new(&case)?
+        };
+        let first = run.trajectory().steps;
+        while !run.is_done() {
+            run.step()?;
+            if checkpoints.due(run.trajectory().steps) || (run.is_done() && checkpoints.every.is_some()) {
+                run.save(&path)?;
+            }
+            let (tr, fluid) = (run.trajectory(), run.fluid());
             let el = start.elapsed().as_secs_f64();
             let t = tr.steps as f64 * case.dt;
             if el - last_print > 5.0 {
                 last_print = el;
-                let mlups = tr.steps as f64 * tr.cells as f64 / el / 1e6;
-                let eta = el * (steps_max / tr.steps as f64 - 1.0);
+                let done = (tr.steps - first) as f64;
+                let mlups = done * tr.cells as f64 / el / 1e6;
+                let eta = el * ((steps_max - first as f64) / done - 1.0);
                 let gap = tr.samples.last().map_or(0.0, |s| s.1);
                 println!("  step {:>6}  t = {:.4} s  gap = {:>7.3} mm  {:>6.1} MLUPs  ETA ≤ {:.0} s", tr.steps, t, gap * 1e3, mlups, eta);
             }
@@ -112,7 +130,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     }
                 }
             }
-        })?;
+        }
+        let traj = run.finish();
         report(&case, &traj);
         runs.push(Run { h0, dx, contact, case, traj });
     }
@@ -211,9 +230,8 @@ fn report(case: &WetRebound, t: &Trajectory) {
 /// dashed.
 fn plot(path: &std::path::Path, runs: &[Run], finest: f64) -> Result<(), Box<dyn std::error::Error>> {
     common::register_fonts();
-    let tmp = path.with_extension("tmp.png");
-    {
-        let root = BitMapBackend::new(&tmp, (1100, 700)).into_drawing_area();
+    discrete_contact::io::replace_atomically(path, |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::new(tmp, (1100, 700)).into_drawing_area();
         root.fill(&WHITE)?;
         let t_max = runs.iter().flat_map(|r| r.traj.samples.last()).map(|s| s.0).fold(0.0, f64::max);
         let h_max = runs.iter().map(|r| r.h0).fold(0.0, f64::max) * 1.05;
@@ -241,7 +259,6 @@ fn plot(path: &std::path::Path, runs: &[Run], finest: f64) -> Result<(), Box<dyn
         }
         ch.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 13)).position(SeriesLabelPosition::UpperRight).draw()?;
         root.present()?;
-    }
-    std::fs::rename(&tmp, path)?;
-    Ok(())
+        Ok(())
+    })
 }

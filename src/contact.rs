@@ -37,6 +37,7 @@ impl<'a, S: ?Sized> BodyState<'a, S> {
 
 /// What a live contact remembers between sub-steps.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct ContactState {
     /// Damping constant `c` (s/m), fixed at first touch from the approach speed then (and
     /// lowered if the contact is later driven faster, see [`ContactModel::evaluate`]).

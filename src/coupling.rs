@@ -78,6 +78,7 @@ impl FluidSettings {
 
 /// A body the fluid sees.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 struct Coupled {
     collider: ColliderHandle,
     body: RigidBodyHandle,
@@ -125,6 +126,7 @@ pub struct FluidStepReport {
 
 /// Where one fluid step's wall-clock time went (s).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct StepSeconds {
     /// Writing bodies onto the lattice (`d_B`, node velocities).
     pub mapping: Real,
@@ -135,6 +137,7 @@ pub struct StepSeconds {
 }
 
 /// A lattice Boltzmann fluid filling a box, coupled to bodies of a rapier world.
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct Fluid {
     lattice: Lattice,
     units: UnitConverter,

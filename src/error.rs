@@ -69,11 +69,85 @@ pub enum Error {
         /// The largest indentation accepted (m).
         limit: Real,
     },
+    /// A file could not be created, written, renamed or read.
+    #[error("i/o error on `{path}`: {message}")]
+    Io {
+        /// The file's path.
+        path: String,
+        /// The operating system's message.
+        message: String,
+    },
+    /// (feature `checkpoint`) A file that cannot be resumed: not a checkpoint, from another
+    /// format or crate version, of another kind, damaged, or holding state that cannot be
+    /// saved.
+    #[cfg(feature = "checkpoint")]
+    #[error("checkpoint `{path}`: {problem}")]
+    Checkpoint {
+        /// The file's path.
+        path: String,
+        /// What is wrong with it.
+        problem: CheckpointProblem,
+    },
     /// (feature `fluid`) The lattice refused a parameter, blew up (with the step and the node),
     /// or could not write a file.
     #[cfg(feature = "fluid")]
     #[error("fluid: {0}")]
     Fluid(#[from] hlbm::Error),
+}
+
+/// Why a checkpoint cannot be written or resumed (see [`Error::Checkpoint`]).
+#[cfg(feature = "checkpoint")]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CheckpointProblem {
+    /// The file does not start with the checkpoint signature.
+    #[error("not a discrete-contact checkpoint (wrong signature); check the path")]
+    NotACheckpoint,
+    /// Written in another checkpoint format.
+    #[error("checkpoint format {found}, this build reads format {supported}; resume with the version that wrote it")]
+    FormatVersion {
+        /// The file's format.
+        found: u32,
+        /// The format this build reads.
+        supported: u32,
+    },
+    /// Written by another version of the crate, whose state layout may differ.
+    #[error("written by {found}, this is {this}; resume with the version that wrote it")]
+    WrittenBy {
+        /// The writer named in the file.
+        found: String,
+        /// This crate and version.
+        this: String,
+    },
+    /// Holds another kind of state than the caller asked for.
+    #[error("holds `{found}`, expected `{expected}`")]
+    Kind {
+        /// The kind named in the file.
+        found: String,
+        /// The kind asked for.
+        expected: String,
+    },
+    /// Shorter or longer than its header says: an interrupted copy or a damaged disk.
+    #[error("damaged: {found} payload bytes where the header says {expected}")]
+    Length {
+        /// Payload bytes the header announces.
+        expected: u64,
+        /// Payload bytes present.
+        found: u64,
+    },
+    /// The payload's checksum does not match: the file was altered or damaged.
+    #[error("damaged: checksum {computed:08x} where the header says {stored:08x}")]
+    Checksum {
+        /// The checksum in the header.
+        stored: u32,
+        /// The checksum of the payload read.
+        computed: u32,
+    },
+    /// The payload does not decode into the requested state.
+    #[error("payload does not decode as the requested state: {0}")]
+    Decode(String),
+    /// The state cannot be saved (e.g. a body with a custom SDF, a closure).
+    #[error("state cannot be saved: {0}")]
+    Encode(String),
 }
 
 /// `Result` with this crate's [`Error`].

@@ -33,6 +33,10 @@
 //! - `fluid`: wet runs — the [`coupling`] module (rapier bodies four-way coupled with the
 //!   bundled HLBM lattice crate, re-exported as [`hlbm`]); implies `rapier`. A dry build never
 //!   compiles the lattice.
+//! - `checkpoint` (default): serde for every state type (this crate's, rapier's world, the
+//!   lattice) and the [`checkpoint`] module — save a run, resume it bit-identically.
+//!
+//! Every file the crate writes goes through [`io`]: complete or not at all.
 //!
 //! ## Errors
 //! Every fallible call returns [`Error`]; its variants are the catalogue:
@@ -56,6 +60,16 @@
 //! - [`Error::InvalidParameter`] with `periodic box size` — a periodic box shorter than twice a
 //!   pair's reach (two bounding diameters plus the contact margin): a body would meet two
 //!   images of another. Enlarge the box.
+//! - [`Error::Io`] — a file could not be created, written, renamed or read; the message names
+//!   the path and the system's reason (missing folder, no permission, disk full). A failed
+//!   write leaves the previous file in place.
+//! - `Error::Checkpoint` — (feature `checkpoint`) a file that cannot be resumed, with its
+//!   `CheckpointProblem`: `NotACheckpoint` (wrong path), `FormatVersion` / `WrittenBy`
+//!   (written by another version: resume with that version), `Kind` (holds another kind of
+//!   run), `Length` / `Checksum` (truncated or altered: use an earlier checkpoint), `Decode`
+//!   (the payload is not the state asked for), `Encode` (the state holds something that cannot
+//!   be saved: a `ConvexShape::Custom` closure). Validation runs also refuse a checkpoint of
+//!   another case with `InvalidParameter` named `case`.
 //! - `Error::Fluid` — (feature `fluid`) the lattice refused a parameter (e.g. `τ <= 1/2`: raise
 //!   `Δt` or `ν`, or lower `Δx`), blew up (the message names the step and the node: lower the
 //!   lattice velocity with a smaller `Δt`, or raise `τ`), or could not write a file.
@@ -93,11 +107,14 @@
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "checkpoint")]
+pub mod checkpoint;
 pub mod contact;
 #[cfg(feature = "fluid")]
 pub mod coupling;
 pub mod error;
 pub mod force;
+pub mod io;
 pub mod material;
 pub mod overlap;
 pub mod periodic;

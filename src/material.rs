@@ -7,6 +7,7 @@ use crate::math::Real;
 
 /// An isotropic elastic material.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct Material {
     youngs_modulus: Real,
     poisson_ratio: Real,
@@ -44,6 +45,7 @@ pub fn effective_modulus(a: &Material, b: &Material) -> Real {
 
 /// The factor `k` in `F_n = E* k sqrt(V d)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub enum StiffnessFactor {
     /// `k = 4/(3 sqrt(pi))`: reproduces Hertz for curved contacts (sphere–plane, sphere–sphere,
     /// crossed cylinders). The default.
@@ -77,6 +79,7 @@ impl StiffnessFactor {
 
 /// Static/kinetic friction of Nassauer & Kuna.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct Friction {
     /// Static coefficient `mu_s >= mu_k`.
     pub static_coefficient: Real,

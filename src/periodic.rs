@@ -33,6 +33,7 @@ use crate::math::{Real, Vector};
 
 /// An axis-aligned box, periodic along some axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct PeriodicBox {
     min: Vector,
     max: Vector,

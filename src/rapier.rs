@@ -54,6 +54,7 @@ use crate::shape::{ConvexShape, Sdf};
 
 /// What to do when the user's step cannot resolve a contact.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub enum StepPolicy {
     /// Always this many sub-steps per step; refuse with [`Error::TimeStepTooLarge`] when a
     /// contact needs more.
@@ -79,6 +80,7 @@ pub const MIN_SUBSTEPS_PER_CONTACT: Real = 5.0;
 
 /// A handled collider: its SDF and material.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 struct Handled {
     shape: ConvexShape,
     material: Material,
@@ -125,6 +127,7 @@ pub(crate) fn take_back(world: &mut PhysicsWorld, applied: &[(RigidBodyHandle, V
 }
 
 /// The discrete contact model applied to a rapier world.
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct DiscreteContacts {
     settings: OverlapSettings,
     restitution: Real,

@@ -83,6 +83,7 @@ fn polygon_sdf_2d(p: [Real; 2], poly: &[[Real; 2]]) -> (Real, [Real; 2]) {
 /// A convex polyhedron with an exact SDF: inside, the largest face-plane distance; outside,
 /// the distance to the nearest visible face polygon.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct PolyhedronSdf {
     /// Outward unit normal and offset of each face plane (`n·p - offset` is the plane distance).
     planes: Vec<(Vector, Real)>,
@@ -229,6 +230,7 @@ impl Sdf for CustomSdf {
 ///
 /// Cylinders and cones have their axis along the body's `y` axis, as in parry.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub enum ConvexShape {
     /// A sphere of the given radius about the origin.
     Ball {
@@ -278,6 +280,8 @@ pub enum ConvexShape {
         normal: Vector,
     },
     /// A user SDF (must be exact — Euclidean inside and outside — for the guarantees above).
+    /// A closure: a state holding one cannot be checkpointed.
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
     Custom(CustomSdf),
 }
 

@@ -14,19 +14,53 @@ pub fn output_dir() -> PathBuf {
     dir
 }
 
-/// Writes `rows` under `header` to `path` atomically (a temporary file renamed into place),
-/// so a killed run never leaves a half-written file.
+/// Writes `rows` under `header` to `path` atomically ([`discrete_contact::io`]), so a killed
+/// run never leaves a half-written file.
 pub fn write_csv(path: &Path, header: &str, rows: &[String]) {
-    let tmp = path.with_extension("csv.tmp");
-    {
-        let mut f = fs::File::create(&tmp).expect("create csv");
-        writeln!(f, "{header}").unwrap();
-        for r in rows {
-            writeln!(f, "{r}").unwrap();
+    discrete_contact::io::write_atomically(path, |w| {
+        writeln!(w, "{header}")?;
+        rows.iter().try_for_each(|r| writeln!(w, "{r}"))
+    })
+    .unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// `--checkpoint-every N` (steps) and `--resume`: where and how often a long example saves its
+/// runs (`target/validation/checkpoints/`), and whether it goes on from them.
+#[derive(Default)]
+pub struct Checkpoints {
+    /// Save every this many steps (none: never).
+    pub every: Option<u64>,
+    /// Resume each run from its checkpoint when there is one.
+    pub resume: bool,
+    /// The folder of the checkpoint files.
+    pub dir: PathBuf,
+}
+
+impl Checkpoints {
+    /// From the command line, files under `out/checkpoints` (created when saving is asked for).
+    pub fn from_args(args: &Args, out: &Path) -> Self {
+        let every = args.value("--checkpoint-every").map(|_| args.number("--checkpoint-every", 0.0) as u64).filter(|&n| n > 0);
+        let dir = out.join("checkpoints");
+        if every.is_some() {
+            fs::create_dir_all(&dir).expect("create target/validation/checkpoints");
         }
-        f.sync_all().unwrap();
+        Self { every, resume: args.flag("--resume"), dir }
     }
-    fs::rename(&tmp, path).expect("rename csv");
+
+    /// The checkpoint file called `name`.
+    pub fn file(&self, name: &str) -> PathBuf {
+        self.dir.join(format!("{name}.ckpt"))
+    }
+
+    /// Whether to save after `step`.
+    pub fn due(&self, step: u64) -> bool {
+        self.every.is_some_and(|n| step % n == 0)
+    }
+
+    /// The file to resume from, when resuming was asked for and it exists.
+    pub fn resumable(&self, path: &Path) -> bool {
+        self.resume && path.exists()
+    }
 }
 
 /// Mean wall time of `f` in µs, repeated until at least `min_ms` have passed.

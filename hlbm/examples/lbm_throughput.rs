@@ -4,7 +4,6 @@
 //!
 //! Writes `target/validation/lbm_throughput.csv`.
 
-use std::io::Write;
 use std::time::Instant;
 
 use hlbm::Lattice;
@@ -120,13 +119,10 @@ fn main() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("target").join("validation");
     std::fs::create_dir_all(&dir).expect("output folder");
     let path = dir.join("lbm_throughput.csv");
-    let tmp = dir.join("lbm_throughput.csv.tmp");
-    let mut f = std::fs::File::create(&tmp).expect("csv");
-    writeln!(f, "grid,threads,particles,mlups,roofline_mlups").unwrap();
-    for r in rows {
-        writeln!(f, "{r}").unwrap();
-    }
-    f.sync_all().unwrap();
-    std::fs::rename(&tmp, &path).expect("csv");
+    hlbm::vtk::write_atomically(&path, |w| {
+        writeln!(w, "grid,threads,particles,mlups,roofline_mlups")?;
+        rows.iter().try_for_each(|r| writeln!(w, "{r}"))
+    })
+    .expect("csv");
     println!("\nwrote {}", path.display());
 }

@@ -50,6 +50,7 @@ pub struct StepReport {
 
 /// Density and velocity fields written during a sweep when asked for.
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Macroscopic {
     /// Density per cell.
     pub rho: Vec<f64>,
@@ -68,6 +69,7 @@ unsafe impl Send for MacroPtr {}
 unsafe impl Sync for MacroPtr {}
 
 /// A D3Q19 BGK lattice with HLBM particle forcing.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Lattice {
     nx: usize,
     ny: usize,

@@ -3,6 +3,7 @@
 
 /// One node covered by a particle.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ParticleNode {
     /// `x` index of the node in its row.
     pub x: u32,
@@ -20,6 +21,7 @@ pub struct ParticleNode {
 
 /// Particle nodes of every row, sorted by `x`.
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ParticleField {
     rows: Vec<Vec<ParticleNode>>,
     nx: usize,

@@ -9,6 +9,7 @@ pub const MACH_LIMIT_LATTICE_SPEED: f64 = 0.1;
 /// Converts between SI and lattice units from `Δx` (m), `Δt` (s), kinematic viscosity `ν`
 /// (m²/s) and density `ρ` (kg/m³).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct UnitConverter {
     dx: f64,
     dt: f64,

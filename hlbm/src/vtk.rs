@@ -1,7 +1,7 @@
 //! Legacy-VTK output (structured points, binary) of density, velocity and `d_B` for ParaView.
-//! Written to a temporary file and renamed, so a killed run leaves no half-written file.
+//! Written to a temporary file and renamed ([`write_atomically`]), so a killed run leaves no
+//! half-written file.
 
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
@@ -12,13 +12,24 @@ fn io(path: &Path, e: std::io::Error) -> Error {
     Error::Io { path: path.display().to_string(), message: e.to_string() }
 }
 
+/// Writes `path` complete or not at all: `write` fills a temporary file in the same folder,
+/// which is flushed to disk and renamed over `path` (removed if `write` fails).
+pub fn write_atomically(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| io(path, e))?;
+    let mut w = BufWriter::new(tmp);
+    write(&mut w).and_then(|()| w.flush()).map_err(|e| io(path, e))?;
+    let tmp = w.into_inner().map_err(|e| io(path, e.into_error()))?;
+    tmp.as_file().sync_all().map_err(|e| io(path, e))?;
+    tmp.persist(path).map_err(|e| io(path, e.error))?;
+    Ok(())
+}
+
 /// Writes `lattice`'s density, velocity and solid fraction to `path` (`.vtk`), with spacing
 /// `dx` (m) and velocities scaled by `velocity_scale` (lattice → m/s).
 pub fn write(lattice: &Lattice, path: &Path, dx: f64, velocity_scale: f64) -> Result<()> {
     let [nx, ny, nz] = lattice.dims();
-    let tmp = path.with_extension("vtk.tmp");
-    let write_all = || -> std::io::Result<()> {
-        let mut w = BufWriter::new(File::create(&tmp)?);
+    write_atomically(path, |w| {
         writeln!(w, "# vtk DataFile Version 3.0\nhlbm step {}\nBINARY\nDATASET STRUCTURED_POINTS", lattice.time())?;
         writeln!(w, "DIMENSIONS {nx} {ny} {nz}\nORIGIN 0 0 0\nSPACING {dx} {dx} {dx}\nPOINT_DATA {}", nx * ny * nz)?;
         let mut rho = Vec::with_capacity(nx * ny * nz);
@@ -43,9 +54,6 @@ pub fn write(lattice: &Lattice, path: &Path, dx: f64, velocity_scale: f64) -> Re
         w.write_all(&be(&vel))?;
         writeln!(w, "\nSCALARS d_B float 1\nLOOKUP_TABLE default")?;
         w.write_all(&be(&db))?;
-        writeln!(w)?;
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()
-    };
-    write_all().map_err(|e| io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| io(path, e))
+        writeln!(w)
+    })
 }

@@ -31,6 +31,7 @@ use crate::shape::Sdf;
 
 /// How the overlap region is integrated on its grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub enum IntegrationMode {
     /// Node counting, as in seed 000 (first order in `N_c`).
     Count,
@@ -50,6 +51,7 @@ impl IntegrationMode {
 
 /// Resolution and mode of the overlap integration.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct OverlapSettings {
     n_c: usize,
     mode: IntegrationMode,

@@ -36,6 +36,7 @@ const G: Real = 9.81;
 
 /// The particles' shape; a cube has the volume of the sphere of diameter `D`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub enum ParticleShape {
     /// Spheres of diameter `D`.
     Sphere,
@@ -55,6 +56,7 @@ impl ParticleShape {
 
 /// One hindered-settling run (SI units).
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct HinderedSettling {
     /// Particle shape.
     pub shape: ParticleShape,
@@ -213,6 +215,7 @@ impl HinderedSettling {
 
 /// What a run measured.
 #[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct SettlingResult {
     /// Particles placed.
     pub particles: usize,
@@ -337,88 +340,201 @@ pub struct Progress<'a> {
     pub v_over_vs: Real,
 }
 
-/// Runs `case`, calling `progress` after every step.
-pub fn run(case: &HinderedSettling, mut progress: impl FnMut(Progress<'_>)) -> Result<SettlingResult> {
-    case.check()?;
-    let start = Instant::now();
-    let n = case.particle_count();
-    let poses = place_particles(case, n)?;
-    let mut world = PhysicsWorld::new();
-    world.gravity = Vector::new(0.0, 0.0, -G);
-    // Rapier's broad phase sizes its margins by `length_unit` (1 m by default): left at 1 m
-    // for millimetre particles it pairs every body with every other (1.9 M pairs, seconds per
-    // step, for the 30 % peer case).
-    world.integration_parameters.length_unit = case.diameter;
-    let density = case.density_ratio * case.fluid_density;
-    let shape = particle_shape(case);
-    let mut particles: Vec<(RigidBodyHandle, ColliderHandle)> = Vec::with_capacity(n);
-    for pose in &poses {
-        let b = world.insert_body(RigidBodyBuilder::dynamic().pose(*pose).can_sleep(false));
-        let mut collider = ColliderBuilder::new(shape.clone()).density(density);
-        if !case.contacts {
-            // No contact of any kind: particles pass through each other (rapier's own
-            // contacts would otherwise act).
-            collider = collider.collision_groups(InteractionGroups::none());
-        }
-        let c = world.insert_collider(collider, Some(b));
-        particles.push((b, c));
-    }
-    let l = case.box_length();
-    let dx = case.dx();
-    let settings =
-        FluidSettings::new(dx, case.dt(), case.viscosity(), case.fluid_density)?.with_smoothing(case.smoothing_cells * dx)?;
-    let mut fluid = Fluid::new(Vector::ZERO, Vector::splat(l), [true; 3], settings)?;
-    for &(_, c) in &particles {
-        fluid.couple(&world, c)?;
-    }
-    fluid.balance_weight(&world)?;
-    let mut contacts = if case.contacts {
-        let half = 0.5 * case.enlargement_cells * dx;
-        let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?;
-        let mut c = DiscreteContacts::new(overlap, case.restitution)?
-            .with_friction(case.friction)
-            .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 })
-            // E = 5 kPa: a head-on collision at the settling speed indents ~30 % of D (Hertz).
-            .with_indentation_limit(1.0)?
-            .with_periodic(fluid.periodic_box().expect("a triply periodic fluid"));
-        for &(_, h) in &particles {
-            c.handle(&mut world, h, case.material)?;
-        }
-        Some(c)
-    } else {
-        None
-    };
+/// The label of a settling run's checkpoints.
+#[cfg(feature = "checkpoint")]
+pub const CHECKPOINT_KIND: &str = "discrete-contact/hindered_settling";
 
-    let volume = shape.mass_properties(1.0).mass();
-    let (v_s, phi) = (case.terminal_velocity(), case.volume_fraction);
-    let steps = case.steps();
-    // About 400 samples, at most one per 10 steps (the fluid's mean is a sweep of its own).
-    let sample_every = (steps / 400).max(10);
-    let setup_time = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let mut out = SettlingResult { particles: n, steps, cells: fluid.lattice().cells(), setup_time, ..Default::default() };
-    let mut latest = 0.0;
-    for step in 1..=steps {
-        let report = fluid.step(&mut world, contacts.as_mut())?;
+/// A hindered-settling run in progress: the rapier world, the fluid, the contacts and what has
+/// been measured so far. It can be saved at any step and resumed with bit-identical results
+/// ([`save`](Self::save), [`load`](Self::load); feature `checkpoint`).
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+pub struct SettlingRun {
+    case: HinderedSettling,
+    world: PhysicsWorld,
+    fluid: Fluid,
+    contacts: Option<DiscreteContacts>,
+    particles: Vec<(RigidBodyHandle, ColliderHandle)>,
+    /// Volume of one particle (m³).
+    volume: Real,
+    step: u64,
+    sample_every: u64,
+    latest: Real,
+    result: SettlingResult,
+}
+
+impl SettlingRun {
+    /// Sets `case` up: places the particles, builds the bodies, the lattice and the contacts.
+    pub fn new(case: &HinderedSettling) -> Result<Self> {
+        case.check()?;
+        let start = Instant::now();
+        let n = case.particle_count();
+        let poses = place_particles(case, n)?;
+        let mut world = PhysicsWorld::new();
+        world.gravity = Vector::new(0.0, 0.0, -G);
+        // Rapier's broad phase sizes its margins by `length_unit` (1 m by default): left at 1 m
+        // for millimetre particles it pairs every body with every other (1.9 M pairs, seconds
+        // per step, for the 30 % peer case).
+        world.integration_parameters.length_unit = case.diameter;
+        let density = case.density_ratio * case.fluid_density;
+        let shape = particle_shape(case);
+        let mut particles: Vec<(RigidBodyHandle, ColliderHandle)> = Vec::with_capacity(n);
+        for pose in &poses {
+            let b = world.insert_body(RigidBodyBuilder::dynamic().pose(*pose).can_sleep(false));
+            let mut collider = ColliderBuilder::new(shape.clone()).density(density);
+            if !case.contacts {
+                // No contact of any kind: particles pass through each other (rapier's own
+                // contacts would otherwise act).
+                collider = collider.collision_groups(InteractionGroups::none());
+            }
+            let c = world.insert_collider(collider, Some(b));
+            particles.push((b, c));
+        }
+        let l = case.box_length();
+        let dx = case.dx();
+        let settings =
+            FluidSettings::new(dx, case.dt(), case.viscosity(), case.fluid_density)?.with_smoothing(case.smoothing_cells * dx)?;
+        let mut fluid = Fluid::new(Vector::ZERO, Vector::splat(l), [true; 3], settings)?;
+        for &(_, c) in &particles {
+            fluid.couple(&world, c)?;
+        }
+        fluid.balance_weight(&world)?;
+        let contacts = if case.contacts {
+            let half = 0.5 * case.enlargement_cells * dx;
+            let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?;
+            let mut c = DiscreteContacts::new(overlap, case.restitution)?
+                .with_friction(case.friction)
+                .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 })
+                // E = 5 kPa: a head-on collision at the settling speed indents ~30 % of D (Hertz).
+                .with_indentation_limit(1.0)?
+                .with_periodic(fluid.periodic_box().expect("a triply periodic fluid"));
+            for &(_, h) in &particles {
+                c.handle(&mut world, h, case.material)?;
+            }
+            Some(c)
+        } else {
+            None
+        };
+        let steps = case.steps();
+        let result = SettlingResult {
+            particles: n,
+            steps,
+            cells: fluid.lattice().cells(),
+            setup_time: start.elapsed().as_secs_f64(),
+            ..Default::default()
+        };
+        Ok(Self {
+            case: case.clone(),
+            volume: shape.mass_properties(1.0).mass(),
+            world,
+            fluid,
+            contacts,
+            particles,
+            step: 0,
+            // About 400 samples, at most one per 10 steps (the fluid's mean is a sweep of its own).
+            sample_every: (steps / 400).max(10),
+            latest: 0.0,
+            result,
+        })
+    }
+
+    /// The case being run.
+    pub fn case(&self) -> &HinderedSettling {
+        &self.case
+    }
+
+    /// The rapier world of the particles.
+    pub fn world(&self) -> &PhysicsWorld {
+        &self.world
+    }
+
+    /// The fluid.
+    pub fn fluid(&self) -> &Fluid {
+        &self.fluid
+    }
+
+    /// The contacts (`None` for a run without them).
+    pub fn contacts(&self) -> Option<&DiscreteContacts> {
+        self.contacts.as_ref()
+    }
+
+    /// Fluid steps done.
+    pub fn steps_done(&self) -> u64 {
+        self.step
+    }
+
+    /// Whether every planned step has run.
+    pub fn is_done(&self) -> bool {
+        self.step >= self.result.steps
+    }
+
+    /// One four-way coupled step, sampling `⟨v⟩/v_s` when due.
+    pub fn step(&mut self) -> Result<FluidStepReport> {
+        let start = Instant::now();
+        let report = self.fluid.step(&mut self.world, self.contacts.as_mut())?;
+        self.step += 1;
+        let out = &mut self.result;
         out.seconds.mapping += report.seconds.mapping;
         out.seconds.lattice += report.seconds.lattice;
         out.seconds.bodies += report.seconds.bodies;
         out.max_contacts = out.max_contacts.max(report.contacts.map_or(0, |c| c.contacts));
-        if step % sample_every == 0 || step == steps {
+        if self.step % self.sample_every == 0 || self.step == out.steps {
             // Zero-volume-flux frame: ⟨v⟩ = (1 − φ)(⟨v_p⟩ − ⟨u_f⟩), the fluid's mean from the
             // lattice's (all nodes) less the nodes inside particles.
-            let vp = particles.iter().map(|&(b, _)| world.bodies[b].linvel().z).sum::<Real>() / n as Real;
-            let v_box = l.powi(3);
-            let v_solid = n as Real * volume;
-            let u_f = (fluid.mean_velocity().z * v_box - vp * v_solid) / (v_box - v_solid);
-            latest = -(1.0 - phi) * (vp - u_f) / v_s;
-            out.samples.push((step as Real * case.dt(), latest));
+            let case = &self.case;
+            let n = self.particles.len() as Real;
+            let vp = self.particles.iter().map(|&(b, _)| self.world.bodies[b].linvel().z).sum::<Real>() / n;
+            let v_box = case.box_length().powi(3);
+            let v_solid = n * self.volume;
+            let u_f = (self.fluid.mean_velocity().z * v_box - vp * v_solid) / (v_box - v_solid);
+            self.latest = -(1.0 - case.volume_fraction) * (vp - u_f) / case.terminal_velocity();
+            out.samples.push((self.step as Real * case.dt(), self.latest));
         }
-        progress(Progress { step, steps, report: &report, v_over_vs: latest });
+        out.wall_time += start.elapsed().as_secs_f64();
+        Ok(report)
     }
-    let from = case.averaging_start * steps as Real * case.dt();
-    let tail: Vec<Real> = out.samples.iter().filter(|s| s.0 >= from).map(|s| s.1).collect();
-    out.v_mean_over_vs = tail.iter().sum::<Real>() / tail.len().max(1) as Real;
-    out.wall_time = start.elapsed().as_secs_f64();
-    Ok(out)
+
+    /// Latest sample of `⟨v⟩/v_s`.
+    pub fn latest(&self) -> Real {
+        self.latest
+    }
+
+    /// What was measured, with `⟨v⟩/v_s` averaged over the samples after the transient.
+    pub fn finish(mut self) -> SettlingResult {
+        let from = self.case.averaging_start * self.result.steps as Real * self.case.dt();
+        let tail: Vec<Real> = self.result.samples.iter().filter(|s| s.0 >= from).map(|s| s.1).collect();
+        self.result.v_mean_over_vs = tail.iter().sum::<Real>() / tail.len().max(1) as Real;
+        self.result
+    }
+
+    /// Saves the run to `path` (atomically; see [`crate::checkpoint`]).
+    #[cfg(feature = "checkpoint")]
+    pub fn save(&self, path: &std::path::Path) -> Result<()> {
+        crate::checkpoint::save(path, CHECKPOINT_KIND, self)
+    }
+
+    /// Resumes a run saved with [`save`](Self::save); it goes on exactly as the saved run
+    /// would have. Refused with [`Error::Checkpoint`] when the file is not such a run (or is
+    /// damaged), and with [`Error::InvalidParameter`] naming `case` when it holds another case.
+    #[cfg(feature = "checkpoint")]
+    pub fn load(path: &std::path::Path, case: &HinderedSettling) -> Result<Self> {
+        let run: Self = crate::checkpoint::load(path, CHECKPOINT_KIND)?;
+        if run.case != *case {
+            return Err(Error::InvalidParameter {
+                name: "case",
+                value: Real::NAN,
+                allowed: "the case the checkpoint was saved from (its shape, φ, Ar, resolution, contacts, duration, seed)",
+            });
+        }
+        Ok(run)
+    }
+}
+
+/// Runs `case`, calling `progress` after every step.
+pub fn run(case: &HinderedSettling, mut progress: impl FnMut(Progress<'_>)) -> Result<SettlingResult> {
+    let mut run = SettlingRun::new(case)?;
+    while !run.is_done() {
+        let report = run.step()?;
+        progress(Progress { step: run.steps_done(), steps: run.result.steps, report: &report, v_over_vs: run.latest });
+    }
+    Ok(run.finish())
 }

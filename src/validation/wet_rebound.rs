@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, SharedShape};
+use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape};
 
 use crate::coupling::{Fluid, FluidSettings};
 use crate::error::Result;
@@ -18,6 +18,7 @@ use crate::rapier::{DiscreteContacts, StepPolicy};
 
 /// One immersed sphere–wall collision experiment (SI units).
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct WetRebound {
     /// Sphere radius (m).
     pub radius: Real,
@@ -102,6 +103,7 @@ impl WetRebound {
 
 /// What a run recorded.
 #[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct Trajectory {
     /// (time (s), gap between the sphere's surface and the floor (m), vertical velocity (m/s))
     /// after every step.
@@ -147,91 +149,186 @@ impl Trajectory {
     }
 }
 
-/// Runs `case`, calling `progress(trajectory, fluid)` after every step.
-pub fn run(case: &WetRebound, mut progress: impl FnMut(&Trajectory, &Fluid)) -> Result<Trajectory> {
-    let start = Instant::now();
-    let r = case.radius;
-    let mut world = PhysicsWorld::new();
-    world.gravity = Vector::new(0.0, 0.0, -9.81);
-    let centre = Vector::new(0.5 * case.box_size.x, 0.5 * case.box_size.y, r + case.release_gap);
-    let body = world.insert_body(RigidBodyBuilder::dynamic().translation(centre));
-    let sphere = world.insert_collider(ColliderBuilder::ball(r).density(case.particle_density), Some(body));
+/// The label of a rebound run's checkpoints.
+#[cfg(feature = "checkpoint")]
+pub const CHECKPOINT_KIND: &str = "discrete-contact/wet_rebound";
 
-    let settings = FluidSettings::new(case.dx, case.dt, case.viscosity / case.fluid_density, case.fluid_density)?.with_smoothing(case.smoothing)?;
-    let mut fluid = Fluid::closed_box(Vector::ZERO, case.box_size, settings)?;
-    fluid.couple(&world, sphere)?;
+/// A rebound run in progress: world, fluid, contacts and the trajectory so far. It can be
+/// saved at any step and resumed with bit-identical results ([`save`](Self::save),
+/// [`load`](Self::load); feature `checkpoint`).
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+pub struct ReboundRun {
+    case: WetRebound,
+    world: PhysicsWorld,
+    fluid: Fluid,
+    contacts: Option<DiscreteContacts>,
+    body: RigidBodyHandle,
+    out: Trajectory,
+    touching: bool,
+    contacts_seen: usize,
+    last_vz: Real,
+    quiet_since: Option<Real>,
+    steps: u64,
+    done: bool,
+}
 
-    let mut contacts = if case.contact {
-        // The box's floor and side walls as half-spaces on one fixed body.
-        let walls = world.insert_body(RigidBodyBuilder::fixed());
-        let mut colliders = Vec::new();
-        for (normal, at) in [
-            (Vector::Z, Vector::ZERO),
-            (Vector::X, Vector::ZERO),
-            (Vector::Y, Vector::ZERO),
-            (-Vector::X, case.box_size),
-            (-Vector::Y, case.box_size),
-        ] {
-            colliders.push(world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(normal)).translation(at), Some(walls)));
+impl ReboundRun {
+    /// Sets `case` up: the sphere, the fluid in its closed box, the walls' contacts.
+    pub fn new(case: &WetRebound) -> Result<Self> {
+        let start = Instant::now();
+        let r = case.radius;
+        let mut world = PhysicsWorld::new();
+        world.gravity = Vector::new(0.0, 0.0, -9.81);
+        let centre = Vector::new(0.5 * case.box_size.x, 0.5 * case.box_size.y, r + case.release_gap);
+        let body = world.insert_body(RigidBodyBuilder::dynamic().translation(centre));
+        let sphere = world.insert_collider(ColliderBuilder::ball(r).density(case.particle_density), Some(body));
+
+        let settings =
+            FluidSettings::new(case.dx, case.dt, case.viscosity / case.fluid_density, case.fluid_density)?.with_smoothing(case.smoothing)?;
+        let mut fluid = Fluid::closed_box(Vector::ZERO, case.box_size, settings)?;
+        fluid.couple(&world, sphere)?;
+
+        let contacts = if case.contact {
+            // The box's floor and side walls as half-spaces on one fixed body.
+            let walls = world.insert_body(RigidBodyBuilder::fixed());
+            let mut colliders = Vec::new();
+            for (normal, at) in [
+                (Vector::Z, Vector::ZERO),
+                (Vector::X, Vector::ZERO),
+                (Vector::Y, Vector::ZERO),
+                (-Vector::X, case.box_size),
+                (-Vector::Y, case.box_size),
+            ] {
+                colliders.push(world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(normal)).translation(at), Some(walls)));
+            }
+            let settings =
+                OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(0.5 * case.enlargement, 0.5 * case.enlargement)?;
+            let mut c = DiscreteContacts::new(settings, case.dry_restitution)?.with_policy(StepPolicy::AutoSubstep { max_substeps: 100_000 });
+            c.handle(&mut world, sphere, case.sphere_material)?;
+            for h in colliders {
+                c.handle(&mut world, h, case.wall_material)?;
+            }
+            Some(c)
+        } else {
+            None
+        };
+        let out = Trajectory {
+            cells: fluid.lattice().cells(),
+            min_gap: case.release_gap,
+            wall_time: start.elapsed().as_secs_f64(),
+            ..Default::default()
+        };
+        Ok(Self {
+            case: case.clone(),
+            world,
+            fluid,
+            contacts,
+            body,
+            out,
+            touching: false,
+            contacts_seen: 0,
+            last_vz: 0.0,
+            quiet_since: None,
+            steps: (case.end_time / case.dt).ceil() as u64,
+            done: false,
+        })
+    }
+
+    /// Whether the run has ended: the sphere at rest after its first impact (10 ms without a
+    /// speed above 2 mm/s), half-way into the floor (no contact), or the end time reached.
+    pub fn is_done(&self) -> bool {
+        self.done
+    }
+
+    /// The trajectory so far.
+    pub fn trajectory(&self) -> &Trajectory {
+        &self.out
+    }
+
+    /// The fluid (for snapshots).
+    pub fn fluid(&self) -> &Fluid {
+        &self.fluid
+    }
+
+    /// One four-way coupled step, recording the gap and the impact and rebound.
+    pub fn step(&mut self) -> Result<()> {
+        if self.done {
+            return Ok(());
         }
-        let settings = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(0.5 * case.enlargement, 0.5 * case.enlargement)?;
-        let mut c = DiscreteContacts::new(settings, case.dry_restitution)?.with_policy(StepPolicy::AutoSubstep { max_substeps: 100_000 });
-        c.handle(&mut world, sphere, case.sphere_material)?;
-        for h in colliders {
-            c.handle(&mut world, h, case.wall_material)?;
-        }
-        Some(c)
-    } else {
-        None
-    };
-
-    let mut out = Trajectory { cells: fluid.lattice().cells(), min_gap: case.release_gap, ..Default::default() };
-    let mut touching = false;
-    let mut contacts_seen = 0;
-    let mut last_vz = 0.0;
-    let mut quiet_since: Option<Real> = None;
-    let steps = (case.end_time / case.dt).ceil() as u64;
-    for step in 1..=steps {
-        fluid.step(&mut world, contacts.as_mut())?;
-        let t = step as Real * case.dt;
-        let rb = &world.bodies[body];
-        let (gap, vz) = (rb.translation().z - r, rb.linvel().z);
+        let start = Instant::now();
+        self.fluid.step(&mut self.world, self.contacts.as_mut())?;
+        let out = &mut self.out;
+        out.steps += 1;
+        let t = out.steps as Real * self.case.dt;
+        let rb = &self.world.bodies[self.body];
+        let (gap, vz) = (rb.translation().z - self.case.radius, rb.linvel().z);
         out.samples.push((t, gap, vz));
         out.min_gap = out.min_gap.min(gap);
-        let now_touching = match &contacts {
+        let now_touching = match &self.contacts {
             Some(c) => c.contact_count() > 0,
             None => gap <= 0.0,
         };
-        if now_touching && !touching {
-            contacts_seen += 1;
+        if now_touching && !self.touching {
+            self.contacts_seen += 1;
             if out.impact.is_none() {
-                out.impact = Some((t, -last_vz));
+                out.impact = Some((t, -self.last_vz));
             }
         }
-        if !now_touching && touching && contacts_seen == 1 && vz > 0.0 {
+        if !now_touching && self.touching && self.contacts_seen == 1 && vz > 0.0 {
             out.rebound_speed = Some(vz);
         }
-        if contacts_seen == 1 && !now_touching && out.rebound_speed.is_some() {
+        if self.contacts_seen == 1 && !now_touching && out.rebound_speed.is_some() {
             out.rebound_height = Some(out.rebound_height.unwrap_or(0.0).max(gap));
         }
-        touching = now_touching;
-        last_vz = vz;
-        out.steps = step;
-        progress(&out, &fluid);
+        self.touching = now_touching;
+        self.last_vz = vz;
         // At rest: after the first impact, 10 ms without a speed above 2 mm/s.
         if out.impact.is_some() && vz.abs() < 2e-3 {
-            let since = *quiet_since.get_or_insert(t);
-            if t - since > 10e-3 {
-                break;
-            }
+            let since = *self.quiet_since.get_or_insert(t);
+            self.done |= t - since > 10e-3;
         } else {
-            quiet_since = None;
+            self.quiet_since = None;
         }
         // Without contact the sphere sinks into the floor: stop once it is half way in.
-        if gap < -0.5 * r {
-            break;
-        }
+        self.done |= gap < -0.5 * self.case.radius || out.steps >= self.steps;
+        out.wall_time += start.elapsed().as_secs_f64();
+        Ok(())
     }
-    out.wall_time = start.elapsed().as_secs_f64();
-    Ok(out)
+
+    /// The recorded trajectory.
+    pub fn finish(self) -> Trajectory {
+        self.out
+    }
+
+    /// Saves the run to `path` (atomically; see [`crate::checkpoint`]).
+    #[cfg(feature = "checkpoint")]
+    pub fn save(&self, path: &std::path::Path) -> Result<()> {
+        crate::checkpoint::save(path, CHECKPOINT_KIND, self)
+    }
+
+    /// Resumes a run saved with [`save`](Self::save); refused with [`Error::Checkpoint`](crate::Error::Checkpoint) when
+    /// the file is not such a run (or is damaged), and with [`Error::InvalidParameter`](crate::Error::InvalidParameter) naming
+    /// `case` when it holds another case.
+    #[cfg(feature = "checkpoint")]
+    pub fn load(path: &std::path::Path, case: &WetRebound) -> Result<Self> {
+        let run: Self = crate::checkpoint::load(path, CHECKPOINT_KIND)?;
+        if run.case != *case {
+            return Err(crate::Error::InvalidParameter {
+                name: "case",
+                value: Real::NAN,
+                allowed: "the case the checkpoint was saved from (sizes, densities, viscosity, release gap, resolution, contact)",
+            });
+        }
+        Ok(run)
+    }
+}
+
+/// Runs `case`, calling `progress(trajectory, fluid)` after every step.
+pub fn run(case: &WetRebound, mut progress: impl FnMut(&Trajectory, &Fluid)) -> Result<Trajectory> {
+    let mut run = ReboundRun::new(case)?;
+    while !run.is_done() {
+        run.step()?;
+        progress(&run.out, &run.fluid);
+    }
+    Ok(run.finish())
 }
