@@ -12,6 +12,10 @@
 //! U the Stokes velocity), `--tau 0.55`, `--no-compare` (skip the runs without contacts),
 //! `--peer-steps 100`, `--youngs` (Pa; 5 kPa, 50 kPa with `--quick`).
 //!
+//! `--perf-table` times `--perf-steps` (default 600) steps at φ = 10, 20, 30 % with and
+//! without contacts in an 8 D and a 15 D box at the quick resolution (D = 6 Δx, E = 50 kPa):
+//! MLUPs, seconds per 1000 steps and the time split, in `hindered_settling_perf.csv`.
+//!
 //! Long runs: `--checkpoint-every N` saves each case every N steps (and when it ends) to
 //! `target/validation/checkpoints/`; after a stop, the same command with `--resume` goes on
 //! from there with bit-identical results (finished cases are not run again). A checkpoint
@@ -47,6 +51,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = common::output_dir();
     if args.flag("--peer-case") {
         return peer_case(&args, &dir);
+    }
+    if args.flag("--perf-table") {
+        return perf_table(&args, &dir);
     }
     let quick = args.flag("--quick");
     let phis = args.list("--phi", &[0.1, 0.2, 0.3]);
@@ -296,6 +303,52 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
         &rows,
     );
     println!("wrote {}/hindered_settling_peer.csv", dir.display());
+    Ok(())
+}
+
+/// MLUPs and seconds per 1000 steps with and without contacts at φ = 10, 20, 30 % for two
+/// box sizes (quick resolution), from rest: the contacts form during the run.
+fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    let steps = args.number("--perf-steps", 600.0) as u64;
+    let mut rows = Vec::new();
+    println!("{:>5} {:>6} {:>5} {:>9} {:>8} {:>10} {:>9} {:>9} {:>10}", "box_D", "nodes", "phi", "contacts", "N", "s/1000", "MLUPs", "contacts%", "max_contacts");
+    for box_d in [8.0, 15.0] {
+        for phi in [0.1, 0.2, 0.3] {
+            for contacts in [true, false] {
+                let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, phi, 1000.0)?;
+                case.nodes_per_diameter = 6.0;
+                case.box_nodes = (box_d * case.nodes_per_diameter) as usize;
+                case.material = discrete_contact::Material::new(5e4, case.material.poisson_ratio())?;
+                case.contacts = contacts;
+                case.duration = steps as f64 * case.dt() * case.stokes_velocity() / case.diameter;
+                let r = run_with_progress(&case, &common::Checkpoints::default())?;
+                let share = 100.0 * r.seconds.bodies / r.wall_time;
+                println!(
+                    "{:>5} {:>6} {:>5} {:>9} {:>8} {:>10.1} {:>9.2} {:>9.0} {:>10}",
+                    box_d, case.box_nodes, phi, contacts, r.particles, 1000.0 * r.seconds_per_step(), r.mlups(), share, r.max_contacts
+                );
+                rows.push(format!(
+                    "{},{},{},{},{},{},{:.3},{:.3},{:.1},{}",
+                    box_d,
+                    case.box_nodes,
+                    phi,
+                    contacts,
+                    r.particles,
+                    r.steps,
+                    1000.0 * r.seconds_per_step(),
+                    r.mlups(),
+                    share,
+                    r.max_contacts
+                ));
+            }
+        }
+    }
+    common::write_csv(
+        &dir.join("hindered_settling_perf.csv"),
+        "box_d,box_nodes,phi,with_contacts,n_particles,steps,s_per_1000_steps,mlups,bodies_percent,max_contacts",
+        &rows,
+    );
+    println!("wrote {}/hindered_settling_perf.csv", dir.display());
     Ok(())
 }
 
