@@ -312,7 +312,7 @@ fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn 
     let steps = args.number("--perf-steps", 600.0) as u64;
     let mut rows = Vec::new();
     println!("{:>5} {:>6} {:>5} {:>9} {:>8} {:>10} {:>9} {:>9} {:>10}", "box_D", "nodes", "phi", "contacts", "N", "s/1000", "MLUPs", "contacts%", "max_contacts");
-    for box_d in [8.0, 15.0] {
+    for box_d in args.list("--perf-box-d", &[8.0, 15.0]) {
         for phi in [0.1, 0.2, 0.3] {
             for contacts in [true, false] {
                 let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, phi, 1000.0)?;

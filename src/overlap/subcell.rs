@@ -81,6 +81,8 @@ impl EdgeCache {
 struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     pair: &'p Pair<'a, A, B>,
     cache: EdgeCache,
+    /// Whether crossings need the other body's distance (a second clip follows).
+    need_other: bool,
 }
 
 /// Volume, moment, normal and bounds summed over the clipped pieces.
@@ -121,33 +123,38 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
     }
 
-    /// The point where body `s`'s surface crosses the edge `p`–`q` (`p` inside, `q` outside).
+    /// The point where body `s`'s surface crosses the edge `p`–`q` (`p` inside, `q` outside),
+    /// with the other body's distance there when a clip by the other body follows
+    /// (`need_other`; NaN otherwise — computed later if a neighbouring cell needs it).
     fn cut(&mut self, s: usize, p: &Vert, q: &Vert) -> Vert {
         let o = 1 - s;
         let (lo, hi) = if p.node < q.node { (p, q) } else { (q, p) };
         let cached = hi.node != NOT_A_NODE;
         let slot = if cached { Some((lo.node as usize, self.cache.dir(lo.node, hi.node) - 1)) } else { None };
+        let e = hi.x - lo.x;
+        let mut d = [0.0; 2];
         if let Some((n, k)) = slot {
             let (t, other) = self.cache.t[s][n][k];
             if !t.is_nan() {
-                let mut d = [0.0; 2];
+                let x = lo.x + e * t;
                 d[o] = other;
-                return Vert { x: lo.x + (hi.x - lo.x) * t, d, node: NOT_A_NODE };
+                if other.is_nan() && self.need_other {
+                    d[o] = self.distance(o, x);
+                    self.cache.t[s][n][k].1 = d[o];
+                }
+                return Vert { x, d, node: NOT_A_NODE };
             }
         }
-        let e = hi.x - lo.x;
         let f = |t: Real| self.distance(s, lo.x + e * t);
         // An edge made by the first clip (rim cells only) is used by this cell alone: a loose
         // crossing keeps its error within the piecewise-linear surface's.
         let tol = if cached { EDGE_TOL } else { CLIPPED_EDGE_TOL };
         let t = crossing(f, (0.0, lo.d[s]), (1.0, hi.d[s]), tol, tol * e.length());
         let x = lo.x + e * t;
-        let other = self.distance(o, x);
+        d[o] = if self.need_other { self.distance(o, x) } else { Real::NAN };
         if let Some((n, k)) = slot {
-            self.cache.t[s][n][k] = (t, other);
+            self.cache.t[s][n][k] = (t, d[o]);
         }
-        let mut d = [0.0; 2];
-        d[o] = other;
         Vert { x, d, node: NOT_A_NODE }
     }
 
@@ -206,10 +213,13 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         let second = 1 - first;
         // B's outward normal points from B to A, A's from A to B.
         let sign = if second == 1 { 1.0 } else { -1.0 };
+        self.need_other = true;
         self.clip(
             first,
             p,
             &mut |cutter, outer| {
+                // The first clip's crossings are done; the second clip's are final.
+                cutter.need_other = false;
                 cutter.clip(
                     second,
                     outer,
@@ -255,7 +265,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
     let m = n + 1;
     let h = grid.h;
     let cell = h.x * h.y * h.z;
-    let mut cutter = Cutter { pair, cache: EdgeCache::new(values.len(), m) };
+    let mut cutter = Cutter { pair, cache: EdgeCache::new(values.len(), m), need_other: true };
     let inf = Vector::splat(Real::INFINITY);
     let mut it = Sums { volume: 0.0, moment: Vector::ZERO, normal: Vector::ZERO, area: 0.0, lo: inf, hi: -inf };
     for k in 0..n {
