@@ -34,7 +34,7 @@
 //! # Ok::<(), discrete_contact::Error>(())
 //! ```
 
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::Path;
 
 use serde::de::DeserializeOwned;
@@ -100,7 +100,15 @@ pub fn save<T: Serialize + ?Sized>(path: &Path, kind: &str, state: &T) -> Result
 /// a checkpoint, is of another format, crate version or kind, is truncated or altered, or does
 /// not decode as `T`.
 pub fn load<T: DeserializeOwned>(path: &Path, kind: &str) -> Result<T> {
-    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
+    // The signature first: a large file of another kind is refused without reading it.
+    let mut file = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
+    let mut bytes = vec![0u8; MAGIC.len()];
+    match file.read_exact(&mut bytes) {
+        Ok(()) if bytes == MAGIC => {}
+        Err(e) if e.kind() != std::io::ErrorKind::UnexpectedEof => return Err(io_error(path, e)),
+        _ => return Err(problem(path, CheckpointProblem::NotACheckpoint)),
+    }
+    file.read_to_end(&mut bytes).map_err(|e| io_error(path, e))?;
     let payload = payload(&bytes, kind).map_err(|p| problem(path, p))?;
     let decode = |why: String| problem(path, CheckpointProblem::Decode(why));
     match postcard::take_from_bytes(payload) {

@@ -11,8 +11,13 @@
 //!
 //! Volume and first moment of the clipped pieces are closed-form; cells wholly inside count
 //! whole, cells wholly outside cost nothing. The normal is the area vector of the surface
-//! facets: B's part (`d_B = 0` inside A) minus A's part — for a closed overlap both equal
-//! `|S| n`, so no gradient is evaluated.
+//! facets: B's part (`d_B = 0` inside A) and minus A's part — for a closed overlap both equal
+//! `|S| n`, so no gradient is evaluated. The two are blended with the *other* part's area as
+//! weight, so the smaller part counts most: when one body is mostly inside the other, its own
+//! surface is nearly closed and its area vector a small difference of large facets (where the
+//! rim's linearisation errors would tilt the normal by several per cent), while the other
+//! body's cap is small and well resolved. Equal parts give the plain mean; swapping the bodies
+//! swaps the weights, so the result stays equal and opposite.
 
 use parry3d_f64::bounding_volume::Aabb;
 
@@ -89,8 +94,9 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
 struct Sums {
     volume: Real,
     moment: Vector,
-    normal: Vector,
-    area: Real,
+    /// Area vectors of A's facets (oriented out of A) and of B's (out of B) and their areas.
+    normal: [Vector; 2],
+    area: [Real; 2],
     lo: Vector,
     hi: Vector,
 }
@@ -211,8 +217,6 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     /// moment (the other order adds the rest) and the other body's facets to the normal.
     fn ordered(&mut self, first: usize, p: &[Vert; 4], weight: Real, sums: &mut Sums) {
         let second = 1 - first;
-        // B's outward normal points from B to A, A's from A to B.
-        let sign = if second == 1 { 1.0 } else { -1.0 };
         self.need_other = true;
         self.clip(
             first,
@@ -234,8 +238,8 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                     },
                     &mut |poly, outward| {
                         let a = area_vector(poly, outward);
-                        sums.normal += a * sign;
-                        sums.area += a.length();
+                        sums.normal[second] += a;
+                        sums.area[second] += a.length();
                     },
                 )
             },
@@ -267,7 +271,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
     let cell = h.x * h.y * h.z;
     let mut cutter = Cutter { pair, cache: EdgeCache::new(values.len(), m), need_other: true };
     let inf = Vector::splat(Real::INFINITY);
-    let mut it = Sums { volume: 0.0, moment: Vector::ZERO, normal: Vector::ZERO, area: 0.0, lo: inf, hi: -inf };
+    let mut it = Sums { volume: 0.0, moment: Vector::ZERO, normal: [Vector::ZERO; 2], area: [0.0; 2], lo: inf, hi: -inf };
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
@@ -297,8 +301,17 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
     Integral {
         volume: it.volume,
         centroid: if it.volume > 0.0 { it.moment / it.volume } else { Vector::ZERO },
-        normal: it.normal,
-        surface_area: it.area,
+        // B's outward normal points from B to A, A's from A to B: both B→A as `n_B − n_A`.
+        normal: {
+            let [area_a, area_b] = it.area;
+            let total = area_a + area_b;
+            if total > 0.0 {
+                (it.normal[1] * area_a - it.normal[0] * area_b) * (2.0 / total)
+            } else {
+                Vector::ZERO
+            }
+        },
+        surface_area: it.area[0] + it.area[1],
         bounds: (it.volume > 0.0).then(|| Aabb::new(it.lo, it.hi)),
     }
 }

@@ -107,7 +107,8 @@ impl HinderedSettling {
     /// Seed 002's case at volume fraction `phi` and Archimedes number `ar`: D = 3 mm resolved by
     /// 9 nodes, box 15 D (135³ nodes), ρ_p/ρ_f = 3.3 (ρ_f = 1000 kg/m³), τ = 0.55, e = 0.926,
     /// μ_s = 0.32, μ_k = 0.16, v_s = 1 mm/s, E = 5 kPa, ν = 0.245, N_c = 8, enlargement
-    /// Δx/5, smoothing Δx/2, 200 D/U, averaged over the second half.
+    /// Δx/5, smoothing Δx/2, 200 D/U, averaged over the second half; contacts resolved with
+    /// 15 sub-steps per Hertz contact time (ours, not the seed's).
     pub fn seed_002(shape: ParticleShape, phi: Real, ar: Real) -> Result<Self> {
         Ok(Self {
             shape,
