@@ -56,6 +56,20 @@ fn writer() -> String {
     format!("{} {}", env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))
 }
 
+thread_local! {
+    /// The typed refusal of a value read from a file (postcard keeps no message of its own).
+    static REFUSED: std::cell::RefCell<Option<Error>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Passes on a constructor's verdict on a value being read from a checkpoint, keeping a
+/// refusal so that [`load`] can name the parameter and its range.
+pub(crate) fn checked<T>(verdict: Result<T>) -> Result<T> {
+    if let Err(e) = &verdict {
+        REFUSED.with(|r| *r.borrow_mut() = Some(e.clone()));
+    }
+    verdict
+}
+
 fn problem(path: &Path, problem: CheckpointProblem) -> Error {
     Error::Checkpoint { path: path.display().to_string(), problem }
 }
@@ -111,10 +125,11 @@ pub fn load<T: DeserializeOwned>(path: &Path, kind: &str) -> Result<T> {
     file.read_to_end(&mut bytes).map_err(|e| io_error(path, e))?;
     let payload = payload(&bytes, kind).map_err(|p| problem(path, p))?;
     let decode = |why: String| problem(path, CheckpointProblem::Decode(why));
+    REFUSED.with(|r| r.borrow_mut().take());
     match postcard::take_from_bytes(payload) {
         Ok((state, [])) => Ok(state),
         Ok((_, rest)) => Err(decode(format!("{} bytes left over: the file holds a larger state", rest.len()))),
-        Err(e) => Err(decode(e.to_string())),
+        Err(e) => Err(decode(REFUSED.with(|r| r.borrow_mut().take()).map_or_else(|| e.to_string(), |refused| refused.to_string()))),
     }
 }
 

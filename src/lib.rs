@@ -67,7 +67,8 @@
 //!   `CheckpointProblem`: `NotACheckpoint` (wrong path), `FormatVersion` / `WrittenBy`
 //!   (written by another version: resume with that version), `Kind` (holds another kind of
 //!   run), `Length` / `Checksum` (truncated or altered: use an earlier checkpoint), `Decode`
-//!   (the payload is not the state asked for), `Encode` (the state holds something that cannot
+//!   (the payload is not the state asked for, or a parameter in it fails its constructor's
+//!   check — the message names it and its range), `Encode` (the state holds something that cannot
 //!   be saved: a `ConvexShape::Custom` closure). Validation runs also refuse a checkpoint of
 //!   another case with `InvalidParameter` named `case`.
 //! - `Error::Fluid` — (feature `fluid`) the lattice refused a parameter (e.g. `τ <= 1/2`: raise
@@ -106,6 +107,27 @@
 //!   Each rank keeps its own rapier world of owned bodies plus kinematic ghosts.
 
 #![warn(missing_docs)]
+
+/// Deserializes a parameter type from its fields through its constructor (feature
+/// `checkpoint`), so values read from a file pass the same checks as values given in code.
+macro_rules! deserialize_checked {
+    ($ty:ident via $shadow:ident { $($field:ident: $fty:ty),* $(,)? } => |$f:ident| $check:expr) => {
+        #[doc = concat!("A [`", stringify!($ty), "`] as read from a file, checked before use.")]
+        #[cfg(feature = "checkpoint")]
+        #[derive(serde::Deserialize)]
+        struct $shadow {
+            $($field: $fty),*
+        }
+
+        #[cfg(feature = "checkpoint")]
+        impl TryFrom<$shadow> for $ty {
+            type Error = crate::Error;
+            fn try_from($f: $shadow) -> crate::Result<Self> {
+                crate::checkpoint::checked($check)
+            }
+        }
+    };
+}
 
 #[cfg(feature = "checkpoint")]
 pub mod checkpoint;

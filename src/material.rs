@@ -8,6 +8,7 @@ use crate::math::Real;
 /// An isotropic elastic material.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "checkpoint", serde(try_from = "MaterialFields"))]
 pub struct Material {
     youngs_modulus: Real,
     poisson_ratio: Real,
@@ -80,6 +81,7 @@ impl StiffnessFactor {
 /// Static/kinetic friction of Nassauer & Kuna.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "checkpoint", serde(try_from = "FrictionFields"))]
 pub struct Friction {
     /// Static coefficient `mu_s >= mu_k`.
     pub static_coefficient: Real,
@@ -225,3 +227,9 @@ impl PairParameters {
         restitution_parameter(self.restitution) / v
     }
 }
+
+deserialize_checked!(Material via MaterialFields { youngs_modulus: Real, poisson_ratio: Real }
+    => |f| Material::new(f.youngs_modulus, f.poisson_ratio));
+
+deserialize_checked!(Friction via FrictionFields { static_coefficient: Real, kinetic_coefficient: Real, transition_speed: Real }
+    => |f| Friction::new(f.static_coefficient, f.kinetic_coefficient, f.transition_speed));

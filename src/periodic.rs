@@ -34,6 +34,7 @@ use crate::math::{Real, Vector};
 /// An axis-aligned box, periodic along some axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "checkpoint", serde(try_from = "BoxFields"))]
 pub struct PeriodicBox {
     min: Vector,
     max: Vector,
@@ -187,6 +188,9 @@ pub fn overlapping_spheres(spheres: &[Sphere], periodic: Option<&PeriodicBox>) -
     pairs.sort_by_key(|&(i, j, _)| (i, j));
     pairs
 }
+
+deserialize_checked!(PeriodicBox via BoxFields { min: Vector, max: Vector, periodic: [bool; 3] }
+    => |f| PeriodicBox::new(f.min, f.max, f.periodic));
 
 #[cfg(test)]
 mod tests {

@@ -207,6 +207,19 @@ fn damaged_foreign_and_mismatched_files_are_refused_with_the_reason() {
         Err(Error::Checkpoint { problem: CheckpointProblem::Kind { .. }, .. }) => {}
         other => panic!("{:?}", other.err()),
     }
+    // Parameters read from a file pass their constructors' checks: a material with E < 0 or
+    // a grid with N_c = 0 is refused by name, not let through to produce NaNs later.
+    let bad = dir.join("bad_material.ckpt");
+    checkpoint::save(&bad, "test/material", &(-1.0f64, 0.3f64)).unwrap();
+    match checkpoint::load::<discrete_contact::Material>(&bad, "test/material") {
+        Err(Error::Checkpoint { problem: CheckpointProblem::Decode(why), .. }) => assert!(why.contains("youngs_modulus"), "{why}"),
+        other => panic!("{other:?}"),
+    }
+    checkpoint::save(&bad, "test/settings", &(0usize, discrete_contact::IntegrationMode::Subcell, [0.0f64; 2])).unwrap();
+    match checkpoint::load::<discrete_contact::OverlapSettings>(&bad, "test/settings") {
+        Err(Error::Checkpoint { problem: CheckpointProblem::Decode(why), .. }) => assert!(why.contains("n_c"), "{why}"),
+        other => panic!("{other:?}"),
+    }
     // A missing file is an i/o error naming the path.
     match checkpoint::load::<u64>(&dir.join("missing.ckpt"), "test/number") {
         Err(Error::Io { path, .. }) => assert!(path.ends_with("missing.ckpt")),

@@ -52,6 +52,7 @@ impl IntegrationMode {
 /// Resolution and mode of the overlap integration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "checkpoint", serde(try_from = "SettingsFields"))]
 pub struct OverlapSettings {
     n_c: usize,
     mode: IntegrationMode,
@@ -584,3 +585,6 @@ fn finish<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let indentation = pair.exit_distance(x_c, normal, t_max) + pair.exit_distance(x_c, -normal, t_max);
     Some(OverlapGeometry { volume: integral.volume, contact_point: x_c, normal, indentation, surface_area: integral.surface_area, corrected_box })
 }
+
+deserialize_checked!(OverlapSettings via SettingsFields { n_c: usize, mode: IntegrationMode, enlargement: [Real; 2] }
+    => |f| OverlapSettings::new(f.n_c, f.mode).and_then(|s| s.with_enlargement(f.enlargement[0], f.enlargement[1])));
