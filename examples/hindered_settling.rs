@@ -112,6 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c0.duration
     );
 
+    let checkpoints = common::Checkpoints::from_args(&args, &dir);
     let mut runs = Vec::new();
     for (shape, phi, ar, contacts) in jobs {
         let case = case_for(shape, phi, ar, contacts)?;
@@ -126,7 +127,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             case.terminal_velocity(),
             case.reynolds()
         );
-        let result = run_with_progress(&case, &common::Checkpoints::from_args(&args, &dir))?;
+        let result = run_with_progress(&case, &checkpoints)?;
         println!(
             "  ⟨v⟩/v_s = {:.3} (Richardson–Zaki {:.3}, Garside–Al-Dibouni {:.3}); {:.1} s, {:.1} MLUPs; time in lattice {:.0} %, mapping {:.0} %, bodies + contacts {:.0} %; at most {} contacts",
             result.v_mean_over_vs,
@@ -232,7 +233,7 @@ fn run_with_progress(case: &HinderedSettling, checkpoints: &common::Checkpoints)
     while !run.is_done() {
         let report = run.step()?;
         let step = run.steps_done();
-        if checkpoints.due(step) || (step == steps && checkpoints.every.is_some()) {
+        if checkpoints.due(step, run.is_done()) {
             let saving = Instant::now();
             run.save(&path)?;
             println!("  step {step:>6}: saved {} ({:.1} s)", path.display(), saving.elapsed().as_secs_f64());

@@ -107,7 +107,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let first = run.trajectory().steps;
         while !run.is_done() {
             run.step()?;
-            if checkpoints.due(run.trajectory().steps) || (run.is_done() && checkpoints.every.is_some()) {
+            if checkpoints.due(run.trajectory().steps, run.is_done()) {
                 run.save(&path)?;
             }
             let (tr, fluid) = (run.trajectory(), run.fluid());

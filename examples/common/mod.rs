@@ -52,9 +52,9 @@ impl Checkpoints {
         self.dir.join(format!("{name}.ckpt"))
     }
 
-    /// Whether to save after `step`.
-    pub fn due(&self, step: u64) -> bool {
-        self.every.is_some_and(|n| step % n == 0)
+    /// Whether to save after `step`: every N steps, and when the run has `finished`.
+    pub fn due(&self, step: u64, finished: bool) -> bool {
+        self.every.is_some_and(|n| finished || step % n == 0)
     }
 
     /// The file to resume from, when resuming was asked for and it exists.

@@ -48,17 +48,20 @@ struct Vert {
     node: u32,
 }
 
+/// Per body, per node, per forward edge: (fraction along the edge, other body's distance).
+type Crossings = [Vec<[(Real, Real); 7]>; 2];
+
 /// Crossings of A's (0) and B's (1) surface on the forward edges of every node: the fraction
 /// along the edge and the other body's distance there; NaN until computed.
 struct EdgeCache {
-    t: [Vec<[(Real, Real); 7]>; 2],
+    t: Crossings,
     m: usize,
 }
 
 thread_local! {
     /// Each thread's edge-cache buffers, kept between evaluations: a fresh ~150 kB allocation
     /// per contact evaluation cost page faults and a copy (~6 % of an evaluation).
-    static SPARE: std::cell::RefCell<[Vec<[(Real, Real); 7]>; 2]> = const { std::cell::RefCell::new([Vec::new(), Vec::new()]) };
+    static SPARE: std::cell::RefCell<Crossings> = const { std::cell::RefCell::new([Vec::new(), Vec::new()]) };
 }
 
 impl EdgeCache {

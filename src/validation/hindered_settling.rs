@@ -525,15 +525,13 @@ impl SettlingRun {
     /// damaged), and with [`Error::InvalidParameter`] naming `case` when it holds another case.
     #[cfg(feature = "checkpoint")]
     pub fn load(path: &std::path::Path, case: &HinderedSettling) -> Result<Self> {
-        let run: Self = crate::checkpoint::load(path, CHECKPOINT_KIND)?;
-        if run.case != *case {
-            return Err(Error::InvalidParameter {
-                name: "case",
-                value: Real::NAN,
-                allowed: "the case the checkpoint was saved from (its shape, φ, Ar, resolution, contacts, duration, seed)",
-            });
-        }
-        Ok(run)
+        super::resume(
+            path,
+            CHECKPOINT_KIND,
+            case,
+            |run: &Self| &run.case,
+            "the case the checkpoint was saved from (its shape, φ, Ar, resolution, contacts, duration, seed)",
+        )
     }
 }
 

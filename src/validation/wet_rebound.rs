@@ -168,7 +168,6 @@ pub struct ReboundRun {
     contacts_seen: usize,
     last_vz: Real,
     quiet_since: Option<Real>,
-    steps: u64,
     done: bool,
 }
 
@@ -229,7 +228,6 @@ impl ReboundRun {
             contacts_seen: 0,
             last_vz: 0.0,
             quiet_since: None,
-            steps: (case.end_time / case.dt).ceil() as u64,
             done: false,
         })
     }
@@ -290,7 +288,7 @@ impl ReboundRun {
             self.quiet_since = None;
         }
         // Without contact the sphere sinks into the floor: stop once it is half way in.
-        self.done |= gap < -0.5 * self.case.radius || out.steps >= self.steps;
+        self.done |= gap < -0.5 * self.case.radius || out.steps as Real >= (self.case.end_time / self.case.dt).ceil();
         out.wall_time += start.elapsed().as_secs_f64();
         Ok(())
     }
@@ -311,15 +309,13 @@ impl ReboundRun {
     /// `case` when it holds another case.
     #[cfg(feature = "checkpoint")]
     pub fn load(path: &std::path::Path, case: &WetRebound) -> Result<Self> {
-        let run: Self = crate::checkpoint::load(path, CHECKPOINT_KIND)?;
-        if run.case != *case {
-            return Err(crate::Error::InvalidParameter {
-                name: "case",
-                value: Real::NAN,
-                allowed: "the case the checkpoint was saved from (sizes, densities, viscosity, release gap, resolution, contact)",
-            });
-        }
-        Ok(run)
+        super::resume(
+            path,
+            CHECKPOINT_KIND,
+            case,
+            |run: &Self| &run.case,
+            "the case the checkpoint was saved from (sizes, densities, viscosity, release gap, resolution, contact)",
+        )
     }
 }
 
