@@ -1,12 +1,21 @@
 //! Runs the stability matrix (stiff materials, fast and slow impacts, restitution 0.1–1,
 //! mass ratios, grazing hit, thin plate, resting contact, a refused step) in the rapier
 //! pipeline and prints one row per case: outcome, error, sub-steps, wall time.
+//!
+//! Then the precision table: the sphere–wall impacts with the body's state in f64 and rounded
+//! to f32 after every sub-step (what rapier3d, f32, would store), near the origin and 1 m and
+//! 10 m away.
+//!
+//! `cargo run --release --example stability_report -- resting` runs only the matrix cases whose
+//! description contains the given text (`-- precision`: only the precision table).
 
+use discrete_contact::validation::precision::{Ending, Impact};
 use discrete_contact::validation::stability::Case;
 use rayon::prelude::*;
 
 fn main() {
-    let cases = Case::matrix();
+    let filter = std::env::args().nth(1).unwrap_or_default();
+    let cases: Vec<Case> = Case::matrix().into_iter().filter(|c| c.describe().contains(&filter)).collect();
     println!("{:<58} {:<10} {:>10} {:>9} {:>9}", "case", "outcome", "error", "substeps", "wall s");
     // Rows appear as cases finish (two at a time).
     let outcomes: Vec<_> = cases
@@ -19,7 +28,26 @@ fn main() {
         .collect();
     let failed = outcomes.iter().filter(|o| o.verdict.starts_with("FAILED")).count();
     println!("\n{} cases, {} ok, {} refused with advice, {failed} failed", cases.len(), outcomes.iter().filter(|o| o.verdict == "ok").count(), outcomes.iter().filter(|o| o.verdict == "refused").count());
+    if filter.is_empty() || filter == "precision" {
+        precision_table();
+    }
     if failed > 0 {
         std::process::exit(1);
     }
+}
+
+/// Restitution error |e_meas/e - 1| with the state in f64 and in f32, per impact.
+fn precision_table() {
+    println!("\nPrecision (e = 0.85, one sub-step = t_H/40): |e_meas/e - 1| with the body's state in f64 / rounded to f32 each sub-step");
+    println!("{:>8} {:>6} {:>9} {:>12} {:>12}", "E (Pa)", "v (m/s)", "offset (m)", "f64", "f32");
+    let show = |r: discrete_contact::Result<Ending>| match r {
+        Ok(Ending::Rebound(err)) => format!("{err:.2e}"),
+        Ok(Ending::Stuck) => "stuck".into(),
+        Err(e) => format!("error: {e}"),
+    };
+    let rows: Vec<String> = Impact::cases()
+        .par_iter()
+        .map(|c| format!("{:>8.0e} {:>7} {:>10} {:>12} {:>12}", c.youngs, c.speed, c.offset, show(c.run(false)), show(c.run(true))))
+        .collect();
+    rows.iter().for_each(|r| println!("{r}"));
 }

@@ -131,6 +131,14 @@ impl Friction {
     }
 }
 
+/// Duration (s) of an elastic Hertz impact, `t_H = 2.87 (m*² / (R* E*² v0))^(1/5)`, for the
+/// effective mass `m*` (kg), radius `R*` (m), modulus `E*` (Pa) and approach speed `v0` (m/s):
+/// the time scale the contact sub-steps resolve (see
+/// [`DiscreteContacts::substeps`](crate::rapier::DiscreteContacts::substeps)).
+pub fn hertz_contact_time(m_star: Real, r_star: Real, e_star: Real, v0: Real) -> Real {
+    2.87 * (m_star * m_star / (r_star * e_star * e_star * v0)).powf(0.2)
+}
+
 /// Damping constant `c` (s/m) that gives restitution `e` for an impact at normal speed `v0`
 /// under any force `f(x) (1 + c x')` (Carvalho & Martins 2019).
 ///

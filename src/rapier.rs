@@ -46,7 +46,7 @@ use rapier3d_f64::prelude::{
 use crate::contact::{BodyState, ContactModel, ContactState};
 use crate::error::{check_positive, Error, Result};
 use crate::force::BodyKinematics;
-use crate::material::{effective_modulus, Friction, Material, PairParameters, StiffnessFactor};
+use crate::material::{effective_modulus, hertz_contact_time, Friction, Material, PairParameters, StiffnessFactor};
 use crate::math::{Pose, Real, Vector};
 use crate::overlap::OverlapSettings;
 use crate::periodic::{overlapping_spheres, PeriodicBox, Sphere};
@@ -536,7 +536,7 @@ impl DiscreteContacts {
             let rim = |k: &BodyKinematics, r: Real| if r.is_finite() { k.angvel.length() * r } else { 0.0 };
             let rims = rim(&ka, ha.radius) + rim(&kb, hb.radius);
             let v0 = ((ka.linvel - kb.linvel).length() + rims).max(1e-3);
-            let t_h = 2.87 * (m_star * m_star / (r_star * e_star * e_star * v0)).powf(0.2);
+            let t_h = hertz_contact_time(m_star, r_star, e_star, v0);
             // Hertz's deepest indentation, from the speed along the line from A to B (a body
             // sliding past another does not indent it); beyond the limit the bodies pass through.
             let towards_b = match (&ha.shape, &hb.shape) {

@@ -270,3 +270,24 @@ fn damping_rebases_when_a_contact_is_driven_faster() {
     let ratio = hard.force.normal_force / elastic;
     assert_relative_eq!(ratio, 1.0 + a, max_relative = 1e-9);
 }
+
+/// A contact that begins with a vanishing overlap (1e-18 m, as when a body lands exactly on a
+/// sub-step) has a box of almost nothing; one sub-step later the sphere is 0.9 µm deep. The
+/// persistent evaluation must still find the whole overlap — before the fix it lost the contact
+/// for a sub-step and let the sphere sink unopposed.
+#[test]
+fn a_contact_begun_at_a_vanishing_overlap_is_kept_when_it_deepens() {
+    let (r, d) = (0.005, 8.8e-7);
+    let ball = ConvexShape::ball(r).unwrap();
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    let m = model(IntegrationMode::Subcell, 4, 0.85);
+    let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
+    let at = |y: f64| BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, y, 0.0))).moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO);
+    let mut state: Option<ContactState> = None;
+    m.evaluate(&at(r - 1e-18), &wall, &mut state).unwrap();
+    assert!(state.is_some(), "the touch starts a contact");
+    let deeper = m.evaluate(&at(r - d), &wall, &mut state).unwrap().expect("the deeper overlap is found");
+    assert_relative_eq!(deeper.geometry.indentation, d, max_relative = 0.02);
+    let fresh = m.evaluate(&at(r - d), &wall, &mut None).unwrap().unwrap();
+    assert_relative_eq!(deeper.geometry.volume, fresh.geometry.volume, max_relative = 0.05);
+}

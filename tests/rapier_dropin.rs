@@ -84,6 +84,7 @@ fn stability_cases_end_right_or_are_refused() {
         (Case::Grazing, "ok"),
         (Case::ThinPlate, "ok"),
         (Case::RefusedStep, "refused"),
+        (Case::Resting { steps: 2000, dt: 1e-4 }, "ok"),
     ];
     for (case, verdict) in expect {
         let o = case.run();
@@ -117,4 +118,17 @@ fn contact_forces_do_not_depend_on_the_thread_count() {
         })
     };
     assert_eq!(run(1), run(2));
+}
+
+/// Why the drop-in is f64: a stiff slow impact (E = 200 GPa, 1 cm/s) rebounds the same 10 m
+/// from the origin as at it when the state is f64, and does not happen at all when the state
+/// is rounded to f32 each sub-step (the sub-step's 7e-9 m displacement is below f32's spacing
+/// of coordinates near 10 m, 1e-6 m).
+#[test]
+fn a_stiff_impact_does_not_depend_on_where_the_scene_is_in_f64_and_stalls_in_f32() {
+    use discrete_contact::validation::precision::{Ending, Impact};
+    let at = |offset: f64, f32_state: bool| Impact { youngs: 2e11, speed: 0.01, offset }.run(f32_state).unwrap();
+    let (Ending::Rebound(near), Ending::Rebound(far)) = (at(0.0, false), at(10.0, false)) else { panic!("f64 impacts must rebound") };
+    assert!(near < 0.01 && (near - far).abs() < 1e-3, "restitution error {near} at the origin, {far} 10 m away");
+    assert_eq!(at(10.0, true), Ending::Stuck);
 }

@@ -385,10 +385,13 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         (IntegrationMode::Subcell, Some(p)) if reused.is_some() => follow(&pair, p, &rough, settings.n_c),
         _ => None,
     };
-    let found = followed.or_else(|| {
-        find_box(&pair, reused.as_ref().unwrap_or(&rough), &rough, settings.n_c, settings.mode)
-            .and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings))
-    });
+    let search = |seed: &Aabb| {
+        find_box(&pair, seed, &rough, settings.n_c, settings.mode).and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings))
+    };
+    // Last sub-step's box may be far too small for this one — a contact that began with an
+    // overlap of 1e-18 m and is 1 µm deep a sub-step later: then a fresh search from the rough
+    // box decides (it also runs once when a contact ends).
+    let found = followed.or_else(|| search(reused.as_ref().unwrap_or(&rough))).or_else(|| reused.and_then(|_| search(&rough)));
     let Some(g) = found else { return Ok(None) };
     Ok(Some(OverlapGeometry { contact_point: frame.transform_point(g.contact_point), normal: frame.rotation * g.normal, ..g }))
 }

@@ -6,6 +6,8 @@ pub mod cylinder_impact;
 #[cfg(feature = "rapier")]
 pub mod stability;
 #[cfg(feature = "rapier")]
+pub mod precision;
+#[cfg(feature = "rapier")]
 pub mod drop_in;
 #[cfg(feature = "fluid")]
 pub mod wet_rebound;
