@@ -115,7 +115,9 @@ fn half_space_and_custom_sdfs() {
     )
     .unwrap();
     let ball = ConvexShape::ball(0.3).unwrap();
-    // The same contact from a closure and from the built-in ball.
+    // The same contact from a closure and from the built-in ball: the closure's surface
+    // crossings come from root finding (rim edges to 1e-3 of an edge), the ball's in closed
+    // form, so they agree to that tolerance's effect (measured 2.8e-5).
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let m = Material::new(1e9, 0.3).unwrap();
     let model = ContactModel::new(PairParameters::new(&m, &m, 0.9).unwrap(), OverlapSettings::new(8, IntegrationMode::Subcell).unwrap());
@@ -123,7 +125,8 @@ fn half_space_and_custom_sdfs() {
     let w = BodyState::at_rest(&floor, Pose::IDENTITY);
     let a = model.evaluate(&BodyState::at_rest(&custom, pose), &w, &mut None).unwrap().unwrap();
     let b = model.evaluate(&BodyState::at_rest(&ball, pose), &w, &mut None).unwrap().unwrap();
-    assert!((a.force.force_on_a - b.force.force_on_a).length() < 1e-6 * b.force.force_on_a.length());
+    let rel = (a.force.force_on_a - b.force.force_on_a).length() / b.force.force_on_a.length();
+    assert!(rel < 1e-4, "relative difference {rel:e}");
 }
 
 #[test]
@@ -166,4 +169,52 @@ fn distances_match_brute_force_over_the_surface() {
             assert!((ours - brute).abs() <= tol, "{name} at {p:?}: {ours} vs brute force {brute}");
         }
     }
+}
+
+/// The closed-form surface crossings (ball and half-space, also dilated; cuboid, cylinder and
+/// polyhedron undilated) equal the root of the distance function along the segment — found
+/// here by 200 bisections — for segments from inside to outside and back.
+#[test]
+fn closed_form_crossings_equal_the_distance_functions_root() {
+    let hull: Vec<Vector> = {
+        let mut g = Lcg(7);
+        (0..20).map(|_| g.point(0.3)).collect()
+    };
+    let shapes = [
+        (ConvexShape::ball(0.3).unwrap(), vec![0.0, 0.02]),
+        (ConvexShape::half_space(Vector::new(0.3, 1.0, -0.2)).unwrap(), vec![0.0, 0.02]),
+        (ConvexShape::cuboid(Vector::new(0.3, 0.1, 0.2)).unwrap(), vec![0.0]),
+        (ConvexShape::cylinder(0.2, 0.15).unwrap(), vec![0.0]),
+        (ConvexShape::convex_hull(&hull).unwrap(), vec![0.0]),
+    ];
+    let mut g = Lcg(11);
+    let mut checked = 0;
+    for (shape, offsets) in &shapes {
+        for &eps in offsets {
+            let d = |x: Vector| shape.distance(x) - eps;
+            for _ in 0..2000 {
+                let (p, q) = (g.point(0.4), g.point(0.4));
+                let (dp, dq) = (d(p), d(q));
+                if dp == 0.0 || dq == 0.0 || (dp < 0.0) == (dq < 0.0) {
+                    continue;
+                }
+                let t = shape.segment_crossing(p, q, eps).expect("a closed form for this shape");
+                let (mut lo, mut hi) = (0.0, 1.0);
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if (d(p + (q - p) * mid) < 0.0) == (dp < 0.0) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                assert!((t - lo).abs() * (q - p).length() < 1e-12, "{shape:?} ε = {eps}: {t} vs {lo}");
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 3000, "{checked} segments checked");
+    // No closed form: the cone, a dilated cuboid.
+    assert!(ConvexShape::cone(0.2, 0.1).unwrap().segment_crossing(Vector::ZERO, Vector::X, 0.0).is_none());
+    assert!(ConvexShape::cuboid(Vector::splat(0.1)).unwrap().segment_crossing(Vector::ZERO, Vector::X, 0.01).is_none());
 }

@@ -124,6 +124,11 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         self.rot * self.shape.gradient(self.rot_t * (x - self.origin))
     }
 
+    /// The shape's closed-form crossing of the segment `x0`–`x1` ([`Sdf::segment_crossing`]).
+    fn segment_crossing(&self, x0: Vector, x1: Vector) -> Option<Real> {
+        self.shape.segment_crossing(self.rot_t * (x0 - self.origin), self.rot_t * (x1 - self.origin), self.eps)
+    }
+
     /// The shape's bounds in B's frame, enlarged by `ε`; infinite components stay infinite.
     fn bounds(&self) -> Aabb {
         let b = self.shape.local_bounds();

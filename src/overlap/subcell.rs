@@ -171,11 +171,20 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 return Vert { x, d, node: NOT_A_NODE };
             }
         }
-        let f = |t: Real| self.distance(s, lo.x + e * t);
-        // An edge made by the first clip (rim cells only) is used by this cell alone: a loose
-        // crossing keeps its error within the piecewise-linear surface's.
-        let tol = if cached { EDGE_TOL } else { CLIPPED_EDGE_TOL };
-        let t = crossing(f, (0.0, lo.d[s]), (1.0, hi.d[s]), tol, tol * e.length());
+        let closed_form = if lo.d[s] == 0.0 || hi.d[s] == 0.0 {
+            None
+        } else if s == 0 {
+            self.pair.a.segment_crossing(lo.x, hi.x)
+        } else {
+            self.pair.b.segment_crossing(lo.x, hi.x)
+        };
+        let t = closed_form.unwrap_or_else(|| {
+            let f = |t: Real| self.distance(s, lo.x + e * t);
+            // An edge made by the first clip (rim cells only) is used by this cell alone: a
+            // loose crossing keeps its error within the piecewise-linear surface's.
+            let tol = if cached { EDGE_TOL } else { CLIPPED_EDGE_TOL };
+            crossing(f, (0.0, lo.d[s]), (1.0, hi.d[s]), tol, tol * e.length())
+        });
         let x = lo.x + e * t;
         d[o] = if self.need_other { self.distance(o, x) } else { Real::NAN };
         if let Some((n, k)) = slot {
