@@ -2,7 +2,7 @@
 //! floor and four cuboid walls on a fixed body) filled from above with a mix of spheres,
 //! cylinders, cubes and convex polyhedra, and a see-saw plank on a revolute joint in the middle
 //! of the floor. Nothing in it knows about the discrete contact: the same world runs with
-//! rapier's own contacts or with [`DiscreteContacts`](crate::rapier::DiscreteContacts).
+//! rapier's own contacts or with [`DiscreteContacts`].
 
 use rapier3d_f64::prelude::*;
 
