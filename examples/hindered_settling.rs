@@ -10,7 +10,9 @@
 //! Options: `--phi 0.1,0.2,0.3`, `--ar 500,1000,2000`, `--shapes sphere,cube` (cubes at the
 //! first Ar only), `--nodes-per-d 9`, `--box-d 15` (box edge in D), `--duration 200` (in D/U,
 //! U the Stokes velocity), `--tau 0.55`, `--no-compare` (skip the runs without contacts),
-//! `--peer-steps 100`, `--youngs` (Pa; 5 kPa, 50 kPa with `--quick`).
+//! `--peer-steps 100`, `--youngs` (Pa; 5 kPa, 50 kPa with `--quick`), `--nc 8` (sub-cell
+//! cells across a contact's overlap, in every run including the peer case and the
+//! performance table).
 //!
 //! `--perf-table` times `--perf-steps` (default 600) steps at φ = 10, 20, 30 % with and
 //! without contacts in an 8 D and a 15 D box at the quick resolution (D = 6 Δx, E = 50 kPa):
@@ -75,6 +77,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c.box_nodes = (box_d * c.nodes_per_diameter).round() as usize;
         c.duration = args.number("--duration", if quick { 100.0 } else { 200.0 });
         c.tau = args.number("--tau", c.tau);
+        c.n_c = args.number("--nc", c.n_c as f64) as usize;
         // At D = 6 Δx particles meet at up to ~0.8 m/s, where Hertz puts the seed's 5 kPa
         // indentation past a radius (refused); quick mode stiffens them tenfold.
         let e = args.number("--youngs", if quick { 5e4 } else { c.material.youngs_modulus() });
@@ -264,6 +267,7 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
     for (phi, openlb_with, openlb_without) in OPENLB {
         for contacts in [true, false] {
             let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, phi, 1000.0)?;
+            case.n_c = args.number("--nc", case.n_c as f64) as usize;
             case.contacts = contacts;
             case.duration = steps as f64 * case.dt() * case.stokes_velocity() / case.diameter;
             let r = run_with_progress(&case, &common::Checkpoints::default())?;
@@ -317,6 +321,7 @@ fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn 
         for phi in [0.1, 0.2, 0.3] {
             for contacts in [true, false] {
                 let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, phi, 1000.0)?;
+                case.n_c = args.number("--nc", case.n_c as f64) as usize;
                 case.nodes_per_diameter = 6.0;
                 case.box_nodes = (box_d * case.nodes_per_diameter) as usize;
                 case.material = discrete_contact::Material::new(5e4, case.material.poisson_ratio())?;
