@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
-use crate::d3q19::{collide, collide_with_moments, equilibrium, moments, C, LANES, OPP, Q, W};
+use crate::d3q19::{collide, equilibrium, C, LANES, OPP, Q, W};
 use crate::error::{Error, Result};
 use crate::particles::ParticleField;
 
@@ -591,7 +591,6 @@ impl Lattice {
             let mut pid = [u32::MAX; LANES];
             let mut arm = [[0.0f64; LANES]; 3];
             let has_particles = pnext < prow.len() && (prow[pnext].x as usize) < x0 + lanes;
-            let mut block_moments = None;
             if has_particles {
                 let mut dbv = [[0.0f64; LANES]; 4];
                 while pnext < prow.len() && (prow[pnext].x as usize) < x0 + lanes {
@@ -605,7 +604,7 @@ impl Lattice {
                     pid[l] = p.id;
                     pnext += 1;
                 }
-                let (rho, u) = moments(&blk);
+                let (_, u) = crate::d3q19::moments(&blk);
                 for l in 0..LANES {
                     if pid[l] != u32::MAX {
                         for d in 0..3 {
@@ -613,12 +612,8 @@ impl Lattice {
                         }
                     }
                 }
-                block_moments = Some((rho, u));
             }
-            let (rho, u) = match block_moments {
-                Some((rho, u)) => collide_with_moments(&mut blk, rho, u, self.omega, Some(&du)),
-                None => collide(&mut blk, self.omega, forced.then_some(&du)),
-            };
+            let (rho, u) = collide(&mut blk, self.omega, forced.then_some(&du));
             // Health: branch-free over the block; the slow search only when something is off.
             let mut u2 = [0.0; LANES];
             let mut blk_max = 0.0f64;
