@@ -12,6 +12,9 @@ use crate::math::{Pose, Real, Rotation, Vector};
 use crate::overlap::{IntegrationMode, OverlapSettings};
 use crate::rapier::{DiscreteContacts, StepPolicy};
 
+/// Radius of every sphere of the matrix (m).
+const RADIUS: Real = 0.005;
+
 /// One case of the matrix.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Case {
@@ -111,7 +114,7 @@ impl Case {
     }
 
     fn run_inner(&self) -> Result<(String, Real, usize)> {
-        let r = 0.005;
+        let r = RADIUS;
         let settings = OverlapSettings::new(4, IntegrationMode::Subcell)?;
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::ZERO;
@@ -169,8 +172,9 @@ impl Case {
                 world.gravity = Vector::new(0.0, -9.81, 0.0);
                 world.integration_parameters.dt = dt;
                 let b = sphere(&mut world, r, Vector::ZERO, 7800.0);
-                contacts.handle_all(&mut world, Material::new(5e8, 0.3)?)?;
-                return Self::resting(&mut world, &mut contacts, b, steps);
+                let material = Material::new(5e8, 0.3)?;
+                contacts.handle_all(&mut world, material)?;
+                return Self::resting(&mut world, &mut contacts, b, steps, effective_modulus(&material, &material));
             }
         };
         contacts.handle_all(&mut world, Material::new(youngs, 0.3)?)?;
@@ -234,7 +238,8 @@ impl Case {
         Ok((if err <= 0.05 { "ok".into() } else { format!("FAILED: e = {:.4}", -e_meas) }, err, substeps))
     }
 
-    fn resting(world: &mut PhysicsWorld, contacts: &mut DiscreteContacts, b: RigidBodyHandle, steps: usize) -> Result<(String, Real, usize)> {
+    /// The sphere `b` (`e_star` against the floor) left resting for `steps` steps.
+    fn resting(world: &mut PhysicsWorld, contacts: &mut DiscreteContacts, b: RigidBodyHandle, steps: usize, e_star: Real) -> Result<(String, Real, usize)> {
         let mut substeps = 0;
         let mut y_half = 0.0;
         let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
@@ -253,7 +258,7 @@ impl Case {
         let rb = &world.bodies[b];
         let drift = (rb.translation().y - y_half).abs().max(hi - lo).max(rb.translation().x.abs());
         // The static Hertz indentation under the sphere's weight, d = (3 m g / (4 E* √R))^(2/3).
-        let (r, e_star) = (0.005, effective_modulus(&Material::new(5e8, 0.3)?, &Material::new(5e8, 0.3)?));
+        let r = RADIUS;
         let d_hertz = (3.0 * rb.mass() * 9.81 / (4.0 * e_star * Real::sqrt(r))).powf(2.0 / 3.0);
         let d = r - rb.translation().y;
         // Tolerances: drift or jitter over the second half below 1 % of the static indentation
