@@ -171,7 +171,7 @@ fn distances_match_brute_force_over_the_surface() {
     }
 }
 
-/// The closed-form surface crossings (ball and half-space, also dilated; cuboid, cylinder and
+/// The closed-form surface crossings (ball, half-space and capsule, also dilated; cuboid, cylinder and
 /// polyhedron undilated) equal the root of the distance function along the segment — found
 /// here by 200 bisections — for segments from inside to outside and back.
 #[test]
@@ -186,34 +186,46 @@ fn closed_form_crossings_equal_the_distance_functions_root() {
         (ConvexShape::cuboid(Vector::new(0.3, 0.1, 0.2)).unwrap(), vec![0.0]),
         (ConvexShape::cylinder(0.2, 0.15).unwrap(), vec![0.0]),
         (ConvexShape::convex_hull(&hull).unwrap(), vec![0.0]),
+        (ConvexShape::capsule(Vector::new(-0.2, 0.05, 0.0), Vector::new(0.15, -0.1, 0.1), 0.12).unwrap(), vec![0.0, 0.02]),
     ];
+    // Compares the closed form with bisection on one segment; false when it does not cross.
+    let check = |shape: &ConvexShape, eps: f64, p: Vector, q: Vector| -> bool {
+        let d = |x: Vector| shape.distance(x) - eps;
+        let (dp, dq) = (d(p), d(q));
+        if dp == 0.0 || dq == 0.0 || (dp < 0.0) == (dq < 0.0) {
+            return false;
+        }
+        let t = shape.segment_crossing(p, q, eps).expect("a closed form for this shape");
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if (d(p + (q - p) * mid) < 0.0) == (dp < 0.0) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        assert!((t - lo).abs() * (q - p).length() < 1e-12, "{shape:?} ε = {eps}, {p:?} → {q:?}: {t} vs {lo}");
+        true
+    };
     let mut g = Lcg(11);
     let mut checked = 0;
     for (shape, offsets) in &shapes {
         for &eps in offsets {
-            let d = |x: Vector| shape.distance(x) - eps;
             for _ in 0..2000 {
-                let (p, q) = (g.point(0.4), g.point(0.4));
-                let (dp, dq) = (d(p), d(q));
-                if dp == 0.0 || dq == 0.0 || (dp < 0.0) == (dq < 0.0) {
-                    continue;
-                }
-                let t = shape.segment_crossing(p, q, eps).expect("a closed form for this shape");
-                let (mut lo, mut hi) = (0.0, 1.0);
-                for _ in 0..200 {
-                    let mid = 0.5 * (lo + hi);
-                    if (d(p + (q - p) * mid) < 0.0) == (dp < 0.0) {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                assert!((t - lo).abs() * (q - p).length() < 1e-12, "{shape:?} ε = {eps}: {t} vs {lo}");
-                checked += 1;
+                checked += check(shape, eps, g.point(0.4), g.point(0.4)) as usize;
             }
         }
     }
-    assert!(checked > 3000, "{checked} segments checked");
+    assert!(checked > 4000, "{checked} segments checked");
+    // Segments at right angles to a capsule's axis (the projection onto the axis constant):
+    // from its middle, from inside a cap, both ways.
+    let (a, b) = (Vector::new(-0.2, 0.0, 0.0), Vector::new(0.2, 0.0, 0.0));
+    let capsule = ConvexShape::capsule(a, b, 0.1).unwrap();
+    for p in [Vector::ZERO, a - Vector::new(0.05, 0.0, 0.0), b + Vector::new(0.03, 0.01, 0.0)] {
+        let q = p + Vector::new(0.0, 0.3, 0.1);
+        assert!(check(&capsule, 0.0, p, q) && check(&capsule, 0.0, q, p) && check(&capsule, 0.02, p, q));
+    }
     // No closed form: the cone, a dilated cuboid.
     assert!(ConvexShape::cone(0.2, 0.1).unwrap().segment_crossing(Vector::ZERO, Vector::X, 0.0).is_none());
     assert!(ConvexShape::cuboid(Vector::splat(0.1)).unwrap().segment_crossing(Vector::ZERO, Vector::X, 0.01).is_none());
