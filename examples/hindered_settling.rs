@@ -71,13 +71,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
         .collect();
     let case_for = |shape, phi, ar, contacts| -> Result<HinderedSettling, discrete_contact::Error> {
-        let mut c = HinderedSettling::seed_002(shape, phi, ar)?;
+        let mut c = seed_case(&args, shape, phi, ar)?;
         c.nodes_per_diameter = args.number("--nodes-per-d", if quick { 6.0 } else { 9.0 });
         let box_d = args.number("--box-d", if quick { 8.0 } else { 15.0 });
         c.box_nodes = (box_d * c.nodes_per_diameter).round() as usize;
         c.duration = args.number("--duration", if quick { 100.0 } else { 200.0 });
         c.tau = args.number("--tau", c.tau);
-        c.n_c = args.number("--nc", c.n_c as f64) as usize;
         // At D = 6 Δx particles meet at up to ~0.8 m/s, where Hertz puts the seed's 5 kPa
         // indentation past a radius (refused); quick mode stiffens them tenfold.
         let e = args.number("--youngs", if quick { 5e4 } else { c.material.youngs_modulus() });
@@ -257,6 +256,13 @@ fn run_with_progress(case: &HinderedSettling, checkpoints: &common::Checkpoints)
     Ok(run.finish())
 }
 
+/// Seed 002's case with the options every run takes (`--nc`).
+fn seed_case(args: &common::Args, shape: ParticleShape, phi: f64, ar: f64) -> Result<HinderedSettling, discrete_contact::Error> {
+    let mut c = HinderedSettling::seed_002(shape, phi, ar)?;
+    c.n_c = args.number("--nc", c.n_c as f64) as usize;
+    Ok(c)
+}
+
 /// The peer case (seed 002's study as in its authors' public example): 15 D box, D = 9 Δx,
 /// φ = 15 % and 30 %, with and without contacts, `--peer-steps` steps each; seconds per step
 /// and MLUPs beside OpenLB 1.9's on this kind of machine.
@@ -266,8 +272,7 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
     println!("{:>5} {:>6} {:>9} {:>8} {:>9} {:>8} {:>10} {:>8}", "phi", "N", "contacts", "s/step", "MLUPs", "OpenLB", "speed-up", "<v>/v_s");
     for (phi, openlb_with, openlb_without) in OPENLB {
         for contacts in [true, false] {
-            let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, phi, 1000.0)?;
-            case.n_c = args.number("--nc", case.n_c as f64) as usize;
+            let mut case = seed_case(args, ParticleShape::Sphere, phi, 1000.0)?;
             case.contacts = contacts;
             case.duration = steps as f64 * case.dt() * case.stokes_velocity() / case.diameter;
             let r = run_with_progress(&case, &common::Checkpoints::default())?;
@@ -320,8 +325,7 @@ fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn 
     for box_d in args.list("--perf-box-d", &[8.0, 15.0]) {
         for phi in [0.1, 0.2, 0.3] {
             for contacts in [true, false] {
-                let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, phi, 1000.0)?;
-                case.n_c = args.number("--nc", case.n_c as f64) as usize;
+                let mut case = seed_case(args, ParticleShape::Sphere, phi, 1000.0)?;
                 case.nodes_per_diameter = 6.0;
                 case.box_nodes = (box_d * case.nodes_per_diameter) as usize;
                 case.material = discrete_contact::Material::new(5e4, case.material.poisson_ratio())?;

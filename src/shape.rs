@@ -295,6 +295,18 @@ pub enum ConvexShape {
     Custom(CustomSdf),
 }
 
+/// The larger root of `|w + t v|² = r²` — where the line `w + t v` leaves the ball of radius
+/// `r` about the origin — in the form without cancellation; `None` when the line misses it.
+fn exit_root(w: Vector, v: Vector, r: Real) -> Option<Real> {
+    let (a, b, c) = (v.length_squared(), w.dot(v), w.length_squared() - r * r);
+    let disc = b * b - a * c;
+    if !(a > 0.0 && disc >= 0.0) {
+        return None;
+    }
+    // (-b + √D) / a, rewritten as -c / (b + √D) where b > 0 would cancel.
+    Some(if b > 0.0 { -c / (b + disc.sqrt()) } else { (-b + disc.sqrt()) / a })
+}
+
 impl ConvexShape {
     /// For a point `p` inside the capsule `a`–`b` of radius `r`: the fraction of `d` after
     /// which `p + t d` leaves it. The squared distance to the segment is a convex, piecewise
@@ -304,17 +316,9 @@ impl ConvexShape {
     fn capsule_exit(p: Vector, d: Vector, a: Vector, b: Vector, r: Real) -> Option<Real> {
         let axis = b - a;
         let l2 = axis.length_squared();
-        // Root past 0 (the larger) of |w + t v|² = r² restricted to [lo, hi].
-        let exit = |w: Vector, v: Vector, lo: Real, hi: Real| {
-            let (qa, qb, qc) = (v.length_squared(), w.dot(v), w.length_squared() - r * r);
-            let disc = qb * qb - qa * qc;
-            if !(qa > 0.0 && disc >= 0.0) {
-                return None;
-            }
-            let t = (-qb + disc.sqrt()) / qa;
-            (t >= lo && t <= hi).then_some(t)
-        };
-        if !(l2 > 0.0) {
+        // The exit from one piece's ball or cylinder, if it falls within the piece [lo, hi].
+        let exit = |w: Vector, v: Vector, lo: Real, hi: Real| exit_root(w, v, r).filter(|t| (lo..=hi).contains(t));
+        if l2 <= 0.0 {
             return exit(p - a, d, 0.0, Real::INFINITY);
         }
         // Projection parameter s(t) = s0 + t s1 along the axis.
@@ -348,9 +352,10 @@ impl ConvexShape {
         })
     }
 
-    /// For an undilated cuboid, cylinder or polyhedron and a point `p` inside: the fraction
-    /// of `d` after which `p + t d` leaves the body (the smallest exit over its slabs).
-    fn exit_along(&self, p: Vector, d: Vector) -> Option<Real> {
+    /// For a point `p` inside the body dilated by `offset` (a ball or capsule), or inside the
+    /// undilated cuboid, cylinder or polyhedron: the fraction of `d` after which `p + t d`
+    /// leaves it (for the polytopes the smallest exit over their slabs).
+    fn exit_along(&self, p: Vector, d: Vector, offset: Real) -> Option<Real> {
         // Leaving the slab `n·x <= h` (`n·d > 0`): t = (h - n·p) / (n·d).
         let slab = |n: Vector, h: Real| {
             let nd = n.dot(d);
@@ -361,18 +366,30 @@ impl ConvexShape {
             }
         };
         let t = match self {
+            Self::Ball { radius } => return exit_root(p, d, radius + offset),
+            Self::Capsule { a, b, radius } => return Self::capsule_exit(p, d, *a, *b, radius + offset),
             Self::Cuboid { half_extents } => (0..3).map(|j| slab(Vector::AXES[j], half_extents[j]).min(slab(-Vector::AXES[j], half_extents[j]))).fold(Real::INFINITY, Real::min),
             Self::Cylinder { half_height, radius } => {
                 let caps = slab(Vector::Y, *half_height).min(slab(-Vector::Y, *half_height));
-                // Round side: (p_xz + t d_xz)² = r², the root past 0 (p is inside).
-                let (a, b, c) = (d.x * d.x + d.z * d.z, p.x * d.x + p.z * d.z, p.x * p.x + p.z * p.z - radius * radius);
-                let side = if a > 0.0 { (-b + (b * b - a * c).max(0.0).sqrt()) / a } else { Real::INFINITY };
-                caps.min(side)
+                // Round side: the exit from the disc of `radius` in the xz plane.
+                let xz = |v: Vector| Vector::new(v.x, 0.0, v.z);
+                caps.min(exit_root(xz(p), xz(d), *radius).unwrap_or(Real::INFINITY))
             }
             Self::Polyhedron(poly) => poly.planes.iter().map(|&(n, h)| slab(n, h)).fold(Real::INFINITY, Real::min),
             _ => return None,
         };
         t.is_finite().then_some(t)
+    }
+
+    /// The crossing of the segment `p`–`q` (ends on opposite sides of the surface dilated by
+    /// `offset`) as the exit from its inside end: the fraction from `p`.
+    fn exit_from_inside_end(&self, p: Vector, q: Vector, offset: Real) -> Option<Real> {
+        let e = q - p;
+        if self.distance(p) < offset {
+            self.exit_along(p, e, offset)
+        } else {
+            self.exit_along(q, -e, offset).map(|t| 1.0 - t)
+        }
     }
 
     /// A sphere; refuses a radius that is not finite and positive.
@@ -565,42 +582,16 @@ impl Sdf for ConvexShape {
     }
 
     /// Closed forms, one evaluation instead of ~4–5 distance calls of root finding, and exact:
-    /// the ball (a quadratic), the half-space (linear) and the capsule (piecewise quadratic)
-    /// also dilated; the cuboid, the
-    /// cylinder and the polyhedron undilated (`offset = 0`), as the exit of the segment from
-    /// the intersection of their slabs (and the cylinder's round side).
+    /// the half-space (linear), the ball (a quadratic) and the capsule (piecewise quadratic)
+    /// also dilated; the cuboid, the cylinder and the polyhedron undilated (`offset = 0`), as
+    /// the exit of the segment from the intersection of their slabs (and the cylinder's round
+    /// side).
     fn segment_crossing(&self, p: Vector, q: Vector, offset: Real) -> Option<Real> {
         let e = q - p;
-        let polytope = offset == 0.0 && matches!(self, Self::Cuboid { .. } | Self::Cylinder { .. } | Self::Polyhedron(_));
-        if polytope || matches!(self, Self::Capsule { .. }) {
-            // Leave from the end inside: the first constraint the segment breaks.
-            let (from, dir, flip) = if self.distance(p) < offset { (p, e, false) } else { (q, -e, true) };
-            let t = match self {
-                Self::Capsule { a, b, radius } => Self::capsule_exit(from, dir, *a, *b, radius + offset)?,
-                _ => self.exit_along(from, dir)?,
-            };
-            return Some(if flip { 1.0 - t } else { t }.clamp(0.0, 1.0));
-        }
         let t = match self {
             Self::HalfSpace { normal } => (offset - normal.dot(p)) / normal.dot(e),
-            Self::Ball { radius } => {
-                // |p + t e|² = R²: a t² + 2 b t + c = 0, one root in [0, 1]. The roots are
-                // (-b ± √D)/a; the stable pair is c / (-b ∓ √D) and (-b ∓ √D) / a.
-                let r = radius + offset;
-                let (a, b, c) = (e.length_squared(), p.dot(e), p.length_squared() - r * r);
-                let disc = b * b - a * c;
-                if !(disc >= 0.0 && a > 0.0) {
-                    return None;
-                }
-                let k = -b - disc.sqrt().copysign(b);
-                // `c < 0`: p inside, the exit root; `c > 0`: p outside, the entry root.
-                let (t1, t2) = (c / k, k / a);
-                if (0.0..=1.0).contains(&t1) {
-                    t1
-                } else {
-                    t2
-                }
-            }
+            Self::Ball { .. } | Self::Capsule { .. } => self.exit_from_inside_end(p, q, offset)?,
+            Self::Cuboid { .. } | Self::Cylinder { .. } | Self::Polyhedron(_) if offset == 0.0 => self.exit_from_inside_end(p, q, offset)?,
             _ => return None,
         };
         t.is_finite().then(|| t.clamp(0.0, 1.0))

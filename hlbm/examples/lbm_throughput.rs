@@ -16,7 +16,10 @@ fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool")
 }
 
-/// Bandwidth (GB/s) of `a = b` (16 B/element) and `a = b + s c` (24 B/element) over 7 runs:
+/// Bandwidth runs per thread count.
+const RUNS: usize = 7;
+
+/// Bandwidth (GB/s) of `a = b` (16 B/element) and `a = b + s c` (24 B/element) over `RUNS` runs:
 /// the medians of copy and triad, and the best triad. The roofline uses the median: on a shared
 /// machine single runs now and then read far above what the memory sustains (up to 70 GB/s
 /// seen where the median is 45), and one such run would move every percentage below.
@@ -26,7 +29,7 @@ fn bandwidth(threads: usize) -> (f64, f64, f64) {
     let chunk = n / 64;
     pool(threads).install(|| {
         let (mut copies, mut triads) = (Vec::new(), Vec::new());
-        for _ in 0..7 {
+        for _ in 0..RUNS {
             let t = Instant::now();
             a.par_chunks_mut(chunk).zip(b.par_chunks(chunk)).for_each(|(a, b)| a.copy_from_slice(b));
             copies.push(16.0 * n as f64 / t.elapsed().as_secs_f64() / 1e9);
@@ -41,7 +44,7 @@ fn bandwidth(threads: usize) -> (f64, f64, f64) {
         std::hint::black_box(&a);
         copies.sort_by(f64::total_cmp);
         triads.sort_by(f64::total_cmp);
-        (copies[3], triads[3], triads[6])
+        (copies[RUNS / 2], triads[RUNS / 2], triads[RUNS - 1])
     })
 }
 
@@ -100,7 +103,7 @@ fn mlups(n: usize, threads: usize, particles: bool) -> (f64, f64) {
 
 fn main() {
     let threads_max = std::thread::available_parallelism().map_or(1, |n| n.get()).min(2);
-    println!("Memory bandwidth (median of 7, 3 × 256 MiB arrays):");
+    println!("Memory bandwidth (median of {RUNS}, 3 × 256 MiB arrays):");
     let mut roof = 0.0f64;
     for t in 1..=threads_max {
         let (copy, triad, best) = bandwidth(t);

@@ -14,6 +14,7 @@ use crate::material::{effective_modulus, hertz_contact_time, Material};
 use crate::math::{Pose, Real, Rotation, Vector};
 use crate::overlap::{IntegrationMode, OverlapSettings};
 use crate::rapier::{DiscreteContacts, StepPolicy};
+use crate::validation::stability::RADIUS;
 
 /// One impact: a 1 cm steel sphere (7800 kg/m³, ν = 0.3, e = 0.85) hitting a half-space head-on.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,9 +55,10 @@ impl Impact {
     /// sub-step. The step is a 40th of the sphere's Hertz contact time (within the drop-in's
     /// advice, which takes the bounding sphere's radius, √3 r), one sub-step per step.
     pub fn run(&self, f32_state: bool) -> Result<Ending> {
-        let (r, e) = (0.005, 0.85);
+        let (r, e, density) = (RADIUS, 0.85, 7800.0);
         let material = Material::new(self.youngs, 0.3)?;
-        let mass = 7800.0 * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+        // Rapier computes the mass only at the first step; the step is needed before that.
+        let mass = density * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
         let t_h = hertz_contact_time(mass, r, effective_modulus(&material, &material), self.speed);
         let dt = t_h / 40.0;
         let mut world = PhysicsWorld::new();
@@ -68,7 +70,7 @@ impl Impact {
         // Four sub-steps of flight before the touch.
         let start = o + Vector::new(0.0, r + 4.0 * self.speed * dt, 0.0);
         let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(start).linvel(Vector::new(0.0, -self.speed, 0.0)).can_sleep(false));
-        world.insert_collider(ColliderBuilder::ball(r).density(7800.0), Some(ball));
+        world.insert_collider(ColliderBuilder::ball(r).density(density), Some(ball));
         let settings = OverlapSettings::new(4, IntegrationMode::Subcell)?;
         let mut contacts = DiscreteContacts::new(settings, e)?.with_policy(StepPolicy::Fixed { substeps: 1 });
         contacts.handle_all(&mut world, material)?;

@@ -13,7 +13,7 @@ use crate::overlap::{IntegrationMode, OverlapSettings};
 use crate::rapier::{DiscreteContacts, StepPolicy};
 
 /// Radius of every sphere of the matrix (m).
-const RADIUS: Real = 0.005;
+pub(crate) const RADIUS: Real = 0.005;
 
 /// One case of the matrix.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -259,7 +259,7 @@ impl Case {
         let drift = (rb.translation().y - y_half).abs().max(hi - lo).max(rb.translation().x.abs());
         // The static Hertz indentation under the sphere's weight, d = (3 m g / (4 E* √R))^(2/3).
         let r = RADIUS;
-        let d_hertz = (3.0 * rb.mass() * 9.81 / (4.0 * e_star * Real::sqrt(r))).powf(2.0 / 3.0);
+        let d_hertz = (3.0 * rb.mass() * world.gravity.length() / (4.0 * e_star * Real::sqrt(r))).powf(2.0 / 3.0);
         let d = r - rb.translation().y;
         // Tolerances: drift or jitter over the second half below 1 % of the static indentation
         // (1.3 µm here), the indentation itself within 5 % of Hertz (sub-cell N_c = 4 errs by
