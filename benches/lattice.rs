@@ -1,10 +1,11 @@
 //! The lattice kernel: one block collision (in cache), and full steps of periodic boxes with
-//! and without particle nodes, on 1 and 2 threads. Criterion reports time per step; MLUPs =
-//! cells / time.
+//! and without particle nodes (spheres of radius 4 covering ~20 % of the nodes, their forces
+//! measured by the forcing momentum and by the momentum exchange), on 1 and 2 threads.
+//! Criterion reports time per step; MLUPs = cells / time.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use hlbm::d3q19::{collide, LANES, Q, W};
-use hlbm::Lattice;
+use hlbm::{ForceMethod, Lattice};
 
 fn block(c: &mut Criterion) {
     let mut blk = [[0.0f64; LANES]; Q];
@@ -23,11 +24,24 @@ fn block(c: &mut Criterion) {
 
 fn covered(lat: &mut Lattice) {
     let [nx, ny, nz] = lat.dims();
-    // Every fifth x-plane of nodes half covered: ~20 % particle nodes.
-    for z in 0..nz {
-        for y in 0..ny {
-            for x in (0..nx).step_by(5) {
-                lat.particles.add(x, y, z, 0.5, [1e-3, 0.0, 0.0], [0.0; 3], (x / 20) as u32);
+    // Spheres of radius 4 on a 12-cell grid: ~20 % particle nodes.
+    let centres = |n: usize| (0..n / 12).map(|i| 12.0 * i as f64 + 6.3);
+    let mut id = 0;
+    for cz in centres(nz) {
+        for cy in centres(ny) {
+            for cx in centres(nx) {
+                for z in cz as usize - 5..=cz as usize + 5 {
+                    for y in cy as usize - 5..=cy as usize + 5 {
+                        for x in cx as usize - 5..=cx as usize + 5 {
+                            let arm = [x as f64 - cx, y as f64 - cy, z as f64 - cz];
+                            let d_b = hlbm::solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0, 1.0);
+                            if d_b > 0.0 {
+                                lat.particles.add(x, y, z, d_b, [1e-3, 0.0, 0.0], arm, id);
+                            }
+                        }
+                    }
+                }
+                id += 1;
             }
         }
     }
@@ -39,13 +53,14 @@ fn steps(c: &mut Criterion) {
     for n in [64usize, 128] {
         g.throughput(Throughput::Elements((n * n * n) as u64));
         for threads in [1usize, 2] {
-            for particles in [false, true] {
+            for (name, method) in [("fluid", None), ("forcing", Some(ForceMethod::Forcing)), ("exchange", Some(ForceMethod::MomentumExchange))] {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 let mut lat = Lattice::new(n, n, n, 0.6).unwrap();
-                if particles {
+                if let Some(method) = method {
+                    lat.set_force_method(method);
                     covered(&mut lat);
                 }
-                let id = format!("{n}^3/{threads}t/{}", if particles { "particles" } else { "fluid" });
+                let id = format!("{n}^3/{threads}t/{name}");
                 g.bench_function(BenchmarkId::from_parameter(id), |b| b.iter(|| pool.install(|| lat.step().unwrap())));
             }
         }

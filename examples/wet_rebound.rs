@@ -13,7 +13,8 @@
 //! paper's τ = 7.3), `--vtk-every-ms` (ParaView snapshots), `--no-compare` (skip the runs
 //! without contact), `--checkpoint-every N` (save each run every N steps to
 //! `target/validation/checkpoints/`) and `--resume` (go on from those files after a stop, with
-//! bit-identical results).
+//! bit-identical results), `--momentum-exchange` (the fluid's force on the sphere by Wen et
+//! al.'s link-wise momentum exchange instead of the forcing momentum; see `hlbm::ForceMethod`).
 //!
 //! Writes `target/validation/wet_rebound.csv` (`h0_mm,dx_mm,t_s,gap_mm`, with contact),
 //! `wet_rebound_no_contact.csv` (same columns), `wet_rebound_summary.csv` and
@@ -24,6 +25,7 @@ mod common;
 
 use std::time::Instant;
 
+use discrete_contact::coupling::ForceMethod;
 use discrete_contact::math::Vector;
 use discrete_contact::validation::wet_rebound::{ReboundRun, Trajectory, WetRebound};
 use plotters::prelude::*;
@@ -58,6 +60,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c.dt = dt.parse::<f64>().expect("--dt-us: a number") * 1e-6;
         }
         c.contact = contact;
+        if args.flag("--momentum-exchange") {
+            c.force_method = ForceMethod::MomentumExchange;
+        }
         c
     };
 

@@ -16,8 +16,10 @@
 //! velocity; the momentum that gives this inner fluid comes back as a reaction in the lattice
 //! force. It is a numerical artefact (a rigid body carries no fluid), and at an impact it is
 //! large: the inner fluid's mass (ρ_f/ρ_p of the body's) would be stopped and turned around
-//! with the body and would eat about 2 ρ_f/ρ_p of the rebound. The coupling removes it exactly as
-//! the lattice applies it: per node `d_B (v_p,now − v_p,before)`, summed with the forces.
+//! with the body and would eat about 2 ρ_f/ρ_p of the rebound. Wen et al.'s momentum exchange
+//! (the default [`ForceMethod`]) measures only what crosses the body's outer surface and does
+//! not see it. With [`ForceMethod::Forcing`] the coupling removes it as the lattice applies it:
+//! per node `d_B (v_p,now − v_p,before)`, summed with the forces.
 //!
 //! **Contact candidates come from bounding spheres, not from the lattice.** The paper finds
 //! a wet pair's rough box where two bodies write `d_B` on the same nodes. Those bands (±ε/2
@@ -50,6 +52,7 @@
 //! # Ok::<(), discrete_contact::Error>(())
 //! ```
 
+pub use hlbm::ForceMethod;
 use hlbm::{solid_fraction, Lattice, ParticleNode, UnitConverter};
 use rapier3d_f64::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
 
@@ -64,6 +67,7 @@ use crate::shape::{ConvexShape, Sdf};
 pub struct FluidSettings {
     units: UnitConverter,
     smoothing: Real,
+    force: ForceMethod,
 }
 
 impl FluidSettings {
@@ -71,7 +75,15 @@ impl FluidSettings {
     /// density `rho` (kg/m³); refuses a relaxation time `τ = 1/2 + 3 ν Δt/Δx² ≤ 1/2`. The
     /// smoothing width of `d_B` is one `dx` (change it with [`with_smoothing`](Self::with_smoothing)).
     pub fn new(dx: Real, dt: Real, nu: Real, rho: Real) -> Result<Self> {
-        Ok(Self { units: UnitConverter::new(dx, dt, nu, rho)?, smoothing: dx })
+        Ok(Self { units: UnitConverter::new(dx, dt, nu, rho)?, smoothing: dx, force: ForceMethod::default() })
+    }
+
+    /// How the lattice measures the fluid's force on the bodies (see [`ForceMethod`]): Wen et
+    /// al.'s link-wise momentum exchange (the default), which leaves the fluid inside a body out
+    /// by construction, or the EDM forcing's own momentum with that inner fluid's share removed.
+    pub fn with_force_method(mut self, method: ForceMethod) -> Self {
+        self.force = method;
+        self
     }
 
     /// With a smoothing width `eps` (m) of the solid fraction, `0 < eps <= 4 dx`.
@@ -187,6 +199,7 @@ impl Fluid {
         }
         let mut lattice = Lattice::new(dims[0], dims[1], dims[2], settings.units.tau())?;
         lattice.close_faces(periodic);
+        lattice.set_force_method(settings.force);
         let domain = PeriodicBox::new(min, rounded, periodic)?;
         Ok(Self { lattice, units: settings.units, smoothing: settings.smoothing, origin, domain, bodies: Vec::new() })
     }
@@ -301,6 +314,7 @@ impl Fluid {
         }
         let mut field = std::mem::take(&mut self.lattice.particles);
         let (origin, smoothing, lattice) = (self.origin, self.smoothing, &self.lattice);
+        let inner_fluid = lattice.force_method() == ForceMethod::Forcing;
         let wrap = |i: i64, d: usize| i.rem_euclid(dims[d] as i64) as usize;
         let partial = field.fill_slabs(|z, push| {
             let mut sums: Vec<(usize, Vector, Vector)> = Vec::new();
@@ -321,10 +335,12 @@ impl Fluid {
                         let arm = (p - b.com) / dx;
                         push(y, ParticleNode { x: x as u32, d_b, velocity: vel.to_array(), arm: arm.to_array(), id: b.id as u32 });
                         // The inner fluid's momentum change, removed from the lattice's force.
-                        let before = (v0 + w0.cross(p - c0)) * to_lattice;
-                        let dm = (vel - before) * d_b;
-                        cf += dm;
-                        cm += arm.cross(dm);
+                        if inner_fluid {
+                            let before = (v0 + w0.cross(p - c0)) * to_lattice;
+                            let dm = (vel - before) * d_b;
+                            cf += dm;
+                            cm += arm.cross(dm);
+                        }
                     }
                 }
                 sums.push((b.id, cf, cm));

@@ -4,7 +4,7 @@
 
 use std::sync::OnceLock;
 
-use discrete_contact::coupling::{Fluid, FluidSettings};
+use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod};
 use discrete_contact::math::{Real, Vector};
 use discrete_contact::rapier3d_f64::prelude::*;
 use discrete_contact::validation::wet_rebound::{run, Trajectory, WetRebound};
@@ -12,6 +12,15 @@ use discrete_contact::hlbm::correlations::{di_felice_wall_factor, schiller_nauma
 
 #[test]
 fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {
+    settles_at_the_drag_laws_terminal_velocity(ForceMethod::Forcing);
+}
+
+#[test]
+fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity_with_momentum_exchange() {
+    settles_at_the_drag_laws_terminal_velocity(ForceMethod::MomentumExchange);
+}
+
+fn settles_at_the_drag_laws_terminal_velocity(method: ForceMethod) {
     // D = 9.6 mm resolved by 8 nodes, ρ_p/ρ_f = 1.06 in the Li fluid (ν = 4.08e-5 m²/s),
     // τ = 0.6; box 8 D × 8 D × 10 D with walls: Re ≈ 5.
     let (d, dx, rho_f, nu, ratio) = (9.6e-3, 1.2e-3, 1230.0, 4.08e-5, 1.06);
@@ -21,7 +30,7 @@ fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {
     world.gravity = Vector::new(0.0, 0.0, -9.81);
     let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.5 * w, 0.5 * w, h - 1.5 * d)));
     let sphere = world.insert_collider(ColliderBuilder::ball(0.5 * d).density(ratio * rho_f), Some(body));
-    let settings = FluidSettings::new(dx, dt, nu, rho_f).unwrap();
+    let settings = FluidSettings::new(dx, dt, nu, rho_f).unwrap().with_force_method(method);
     let mut fluid = Fluid::closed_box(Vector::ZERO, Vector::new(w, w, h), settings).unwrap();
     fluid.couple(&world, sphere).unwrap();
     let mut speeds = Vec::new();
@@ -39,7 +48,7 @@ fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {
     let re = u * d / nu;
     let expected = u_inf * di_felice_wall_factor(d / w, re);
     let err = u / expected - 1.0;
-    println!("U = {u:.5} m/s, Re = {re:.2}, Schiller–Naumann {u_inf:.5}, with walls {expected:.5}: {:+.1} % (drift {:.1} %), {} steps", err * 100.0, drift * 100.0, speeds.len());
+    println!("{method:?}: U = {u:.5} m/s, Re = {re:.2}, Schiller–Naumann {u_inf:.5}, with walls {expected:.5}: {:+.1} % (drift {:.1} %), {} steps", err * 100.0, drift * 100.0, speeds.len());
     assert!(drift < 0.03, "not terminal: drift {drift}");
     assert!(err.abs() < 0.06, "terminal velocity {u} vs {expected}");
 }

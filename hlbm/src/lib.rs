@@ -28,6 +28,6 @@ pub mod units;
 pub mod vtk;
 
 pub use error::{Error, Result};
-pub use lattice::{simd_level, Lattice, Macroscopic, NodeKind, ParticleForce, SimdLevel, StepReport};
+pub use lattice::{simd_level, ForceMethod, Lattice, Macroscopic, NodeKind, ParticleForce, SimdLevel, StepReport};
 pub use particles::{solid_fraction, ParticleField, ParticleNode};
 pub use units::UnitConverter;

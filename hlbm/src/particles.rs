@@ -101,6 +101,11 @@ impl ParticleField {
         &self.rows[row]
     }
 
+    /// Number of rows (`ny * nz`).
+    pub fn rows(&self) -> usize {
+        self.rows.len()
+    }
+
     /// Number of particle nodes.
     pub fn len(&self) -> usize {
         self.count

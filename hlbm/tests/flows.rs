@@ -1,6 +1,6 @@
 //! Validation of the lattice: analytical flows, conservation, determinism, health checks.
 
-use hlbm::{Error, Lattice, UnitConverter};
+use hlbm::{ForceMethod, Error, Lattice, UnitConverter};
 
 /// Force-driven channel between halfway bounce-back walls at z = 0.5 and z = h + 0.5.
 fn poiseuille_l2(h: usize) -> f64 {
@@ -86,6 +86,8 @@ fn moving_sphere(lat: &mut Lattice, v: [f64; 3]) {
 #[test]
 fn momentum_is_conserved_to_round_off_in_a_periodic_box() {
     let mut lat = Lattice::new(16, 16, 16, 0.7).unwrap();
+    // The forcing measure: exactly what the particle gave the fluid.
+    lat.set_force_method(ForceMethod::Forcing);
     let v = [0.02, -0.01, 0.005];
     moving_sphere(&mut lat, v);
     let (m0, mut p) = lat.totals();
@@ -108,10 +110,17 @@ fn momentum_is_conserved_to_round_off_in_a_periodic_box() {
 
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
+    for method in [ForceMethod::Forcing, ForceMethod::MomentumExchange] {
+        same_results_on_1_and_2_threads(method);
+    }
+}
+
+fn same_results_on_1_and_2_threads(method: ForceMethod) {
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
             let mut lat = Lattice::new(13, 12, 11, 0.6).unwrap();
+            lat.set_force_method(method);
             lat.close_faces([true, false, true]);
             lat.set_body_acceleration([1e-5, 0.0, 2e-6]);
             moving_sphere(&mut lat, [0.01, 0.0, -0.01]);
@@ -133,7 +142,43 @@ fn results_do_not_depend_on_the_thread_count() {
     let (f1, p1) = run(1);
     let (f2, p2) = run(2);
     assert!(f1.iter().zip(&f2).all(|(a, b)| a.to_bits() == b.to_bits()));
-    assert_eq!(p1, p2);
+    assert_eq!(p1, p2, "{method:?}");
+}
+
+/// Steady flow driven by a body force `g` past a sphere held at rest, in a periodic box. At
+/// steady state the fluid's momentum balance fixes both force measures: the forcing momentum
+/// equals the body force on every node, `F_forcing = Σ_all ρ g`; the momentum exchange sees
+/// only what crosses the particle's outer surface, so it lacks the body force on the fluid share
+/// `(1 − d_B)` of the particle's nodes: `F_exchange = F_forcing − Σ_particle (1 − d_B) ρ g`.
+#[test]
+fn momentum_exchange_balances_the_driving_force_in_steady_flow() {
+    let n = 16;
+    let g = 2e-6;
+    let mut lat = Lattice::new(n, n, n, 1.0).unwrap();
+    lat.set_force_method(ForceMethod::Forcing);
+    lat.set_body_acceleration([g, 0.0, 0.0]);
+    moving_sphere(&mut lat, [0.0; 3]);
+    let mut fluid_share = 0.0;
+    for z in 0..n {
+        for y in 0..n {
+            fluid_share += lat.particles.row(z * n + y).iter().map(|p| 1.0 - p.d_b).sum::<f64>();
+        }
+    }
+    lat.run(4000).unwrap();
+    let (mass, _) = lat.totals();
+    let rho = mass / (n * n * n) as f64;
+    let forcing = lat.step().unwrap().particle_forces[&7].force;
+    lat.set_force_method(ForceMethod::MomentumExchange);
+    let exchange = lat.step().unwrap().particle_forces[&7].force;
+    let drive = mass * g;
+    let expected = forcing[0] - fluid_share * rho * g;
+    println!("drive {drive:e}, forcing {:e}, exchange {:e} (expected {expected:e}, {:.1e} off), fluid share {fluid_share:.2} nodes", forcing[0], exchange[0], exchange[0] / expected - 1.0);
+    assert!((forcing[0] / drive - 1.0).abs() < 1e-4, "forcing {:e} vs drive {drive:e}", forcing[0]);
+    assert!((exchange[0] / expected - 1.0).abs() < 1e-5, "exchange {:e} vs {expected:e}", exchange[0]);
+    // The sphere is symmetric about the flow: no side force, no moment about the flow axis.
+    for f in [forcing, exchange] {
+        assert!(f[1].abs() < 1e-3 * f[0] && f[2].abs() < 1e-3 * f[0], "side force {f:?}");
+    }
 }
 
 #[test]
@@ -228,6 +273,36 @@ fn the_sweep_streams_and_collides_like_the_textbook() {
                     }
                 }
             }
+        }
+    }
+}
+
+/// A particle at rest pressed into a wall (the wall cuts its nodes off) in fluid at rest feels
+/// no force, by either measure: the momentum exchange must not count the lattice's rest
+/// pressure on the surface the wall cuts open.
+#[test]
+fn a_particle_at_rest_against_a_wall_feels_no_force() {
+    for method in [ForceMethod::Forcing, ForceMethod::MomentumExchange] {
+        let n = 14;
+        let mut lat = Lattice::new(n, n, n, 0.8).unwrap();
+        lat.close_faces([true, true, false]);
+        lat.set_force_method(method);
+        // Centre 3 cells above the wall's surface (z = 0.5): radius 4 reaches 1 cell into it.
+        let c = [6.7, 7.2, 3.5];
+        for z in 1..n - 1 {
+            for y in 0..n {
+                for x in 0..n {
+                    let arm = [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]];
+                    let d_b = hlbm::solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0, 1.0);
+                    if d_b > 0.0 {
+                        lat.particles.add(x, y, z, d_b, [0.0; 3], arm, 3);
+                    }
+                }
+            }
+        }
+        for _ in 0..3 {
+            let f = lat.step().unwrap().particle_forces[&3].force;
+            assert!(f.iter().all(|c| c.abs() < 1e-12), "{method:?}: force {f:?} on a particle at rest");
         }
     }
 }

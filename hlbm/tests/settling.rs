@@ -3,19 +3,30 @@
 //!
 //! Box: 10 D × 10 D × 16 D (D = 8 cells), halfway bounce-back on all faces; τ = 0.6;
 //! ρ_p/ρ_f = 2; smoothing width 1 cell. The sphere's equation of motion is integrated
-//! explicitly with the hydrodynamic force of the lattice and the net weight (ρ_p - ρ_f) V g.
+//! explicitly with the hydrodynamic force of the lattice and the net weight (ρ_p - ρ_f) V g —
+//! once with each of the lattice's force measures.
 
-use hlbm::{solid_fraction, Lattice};
+use hlbm::{solid_fraction, ForceMethod, Lattice};
 use hlbm::correlations::{di_felice_wall_factor, schiller_naumann_terminal_velocity};
 
 #[test]
-fn sphere_reaches_the_schiller_naumann_terminal_velocity() {
+fn sphere_reaches_the_schiller_naumann_terminal_velocity_with_the_forcing_momentum() {
+    settles_at_the_schiller_naumann_velocity(ForceMethod::Forcing);
+}
+
+#[test]
+fn sphere_reaches_the_schiller_naumann_terminal_velocity_with_momentum_exchange() {
+    settles_at_the_schiller_naumann_velocity(ForceMethod::MomentumExchange);
+}
+
+fn settles_at_the_schiller_naumann_velocity(method: ForceMethod) {
     let (d, tau, ratio, eps) = (8.0f64, 0.6, 2.0, 1.0);
     let nu = (tau - 0.5) / 3.0;
     let g = 8e-4; // lattice units: Re ≈ 10
     let (nx, ny, nz) = (80usize, 80usize, 128usize);
     let mut lat = Lattice::new(nx, ny, nz, tau).unwrap();
     lat.close_faces([false, false, false]);
+    lat.set_force_method(method);
     let r = d / 2.0;
     let volume = std::f64::consts::PI / 6.0 * d * d * d;
     let mass = ratio * volume;
@@ -53,7 +64,7 @@ fn sphere_reaches_the_schiller_naumann_terminal_velocity() {
     let re = u * d / nu;
     let expected = u_inf * di_felice_wall_factor(d / nx as f64, re);
     let err = u / expected - 1.0;
-    println!("U = {u:.5}, Re = {re:.1}, Schiller–Naumann {u_inf:.5}, with walls {expected:.5}, error {:.2} %, drift {:.2} %", err * 100.0, drift * 100.0);
+    println!("{method:?}: U = {u:.5}, Re = {re:.1}, Schiller–Naumann {u_inf:.5}, with walls {expected:.5}, error {:.2} %, drift {:.2} %", err * 100.0, drift * 100.0);
     assert!(drift < 0.02, "not terminal yet: drift {drift}");
     assert!((1.0..=20.0).contains(&re), "Re = {re}");
     assert!(err.abs() < 0.05, "terminal velocity {u} vs {expected} ({:.1} %)", err * 100.0);

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape};
 
-use crate::coupling::{Fluid, FluidSettings};
+use crate::coupling::{Fluid, FluidSettings, ForceMethod};
 use crate::error::Result;
 use crate::material::Material;
 use crate::math::{Real, Vector};
@@ -51,6 +51,8 @@ pub struct WetRebound {
     pub smoothing: Real,
     /// With the discrete contact (otherwise nothing but the fluid stops the sphere).
     pub contact: bool,
+    /// How the lattice measures the fluid's force on the sphere.
+    pub force_method: ForceMethod,
     /// Stop at this time (s) if the sphere is not at rest before.
     pub end_time: Real,
 }
@@ -80,6 +82,7 @@ impl WetRebound {
             enlargement: dx / 7.0,
             smoothing: 0.5 * dx,
             contact: true,
+            force_method: ForceMethod::default(),
             end_time: 0.25,
         }
     }
@@ -183,7 +186,7 @@ impl ReboundRun {
         let sphere = world.insert_collider(ColliderBuilder::ball(r).density(case.particle_density), Some(body));
 
         let settings =
-            FluidSettings::new(case.dx, case.dt, case.viscosity / case.fluid_density, case.fluid_density)?.with_smoothing(case.smoothing)?;
+            FluidSettings::new(case.dx, case.dt, case.viscosity / case.fluid_density, case.fluid_density)?.with_smoothing(case.smoothing)?.with_force_method(case.force_method);
         let mut fluid = Fluid::closed_box(Vector::ZERO, case.box_size, settings)?;
         fluid.couple(&world, sphere)?;
 
