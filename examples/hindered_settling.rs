@@ -12,7 +12,8 @@
 //! U the Stokes velocity), `--tau 0.55`, `--no-compare` (skip the runs without contacts),
 //! `--peer-steps 100`, `--youngs` (Pa; 5 kPa, 50 kPa with `--quick`), `--nc 8` (sub-cell
 //! cells across a contact's overlap, in every run including the peer case and the
-//! performance table).
+//! performance table), `--forcing-momentum` (the fluid's force on the particles as the EDM
+//! forcing's momentum instead of the link-wise momentum exchange; every run).
 //!
 //! `--perf-table` times `--perf-steps` (default 600) steps at φ = 10, 20, 30 % with and
 //! without contacts in an 8 D and a 15 D box at the quick resolution (D = 6 Δx, E = 50 kPa):
@@ -35,6 +36,7 @@ use std::time::Instant;
 
 use std::path::PathBuf;
 
+use discrete_contact::coupling::ForceMethod;
 use discrete_contact::validation::hindered_settling::{HinderedSettling, ParticleShape, SettlingResult, SettlingRun};
 use plotters::prelude::*;
 
@@ -260,6 +262,9 @@ fn run_with_progress(case: &HinderedSettling, checkpoints: &common::Checkpoints)
 fn seed_case(args: &common::Args, shape: ParticleShape, phi: f64, ar: f64) -> Result<HinderedSettling, discrete_contact::Error> {
     let mut c = HinderedSettling::seed_002(shape, phi, ar)?;
     c.n_c = args.number("--nc", c.n_c as f64) as usize;
+    if args.flag("--forcing-momentum") {
+        c.force_method = ForceMethod::Forcing;
+    }
     Ok(c)
 }
 

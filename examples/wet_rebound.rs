@@ -13,8 +13,9 @@
 //! paper's τ = 7.3), `--vtk-every-ms` (ParaView snapshots), `--no-compare` (skip the runs
 //! without contact), `--checkpoint-every N` (save each run every N steps to
 //! `target/validation/checkpoints/`) and `--resume` (go on from those files after a stop, with
-//! bit-identical results), `--momentum-exchange` (the fluid's force on the sphere by Wen et
-//! al.'s link-wise momentum exchange instead of the forcing momentum; see `hlbm::ForceMethod`).
+//! bit-identical results), `--forcing-momentum` (the fluid's force on the sphere as the EDM
+//! forcing's momentum instead of Wen et al.'s link-wise momentum exchange; see
+//! `hlbm::ForceMethod`).
 //!
 //! Writes `target/validation/wet_rebound.csv` (`h0_mm,dx_mm,t_s,gap_mm`, with contact),
 //! `wet_rebound_no_contact.csv` (same columns), `wet_rebound_summary.csv` and
@@ -60,8 +61,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c.dt = dt.parse::<f64>().expect("--dt-us: a number") * 1e-6;
         }
         c.contact = contact;
-        if args.flag("--momentum-exchange") {
-            c.force_method = ForceMethod::MomentumExchange;
+        if args.flag("--forcing-momentum") {
+            c.force_method = ForceMethod::Forcing;
         }
         c
     };

@@ -22,7 +22,7 @@ use rapier3d_f64::prelude::{
     ColliderBuilder, ColliderHandle, InteractionGroups, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
 };
 
-use crate::coupling::{Fluid, FluidSettings, FluidStepReport};
+use crate::coupling::{Fluid, FluidSettings, FluidStepReport, ForceMethod};
 use crate::error::{Error, Result};
 use crate::material::{Friction, Material};
 use crate::math::{Pose, Real, Rotation, Vector};
@@ -95,6 +95,8 @@ pub struct HinderedSettling {
     pub smoothing_cells: Real,
     /// With the discrete contact (without it particles pass through each other).
     pub contacts: bool,
+    /// How the lattice measures the fluid's force on the particles.
+    pub force_method: ForceMethod,
     /// Simulated time in units of `D / U`, `U` the Stokes velocity `(ρ_p/ρ_f − 1) g D² / (18 ν)`.
     pub duration: Real,
     /// Averaging starts at this fraction of the duration (after the transient).
@@ -128,6 +130,7 @@ impl HinderedSettling {
             enlargement_cells: 0.2,
             smoothing_cells: 0.5,
             contacts: true,
+            force_method: ForceMethod::default(),
             duration: 200.0,
             averaging_start: 0.5,
             seed: 2,
@@ -399,7 +402,7 @@ impl SettlingRun {
         let l = case.box_length();
         let dx = case.dx();
         let settings =
-            FluidSettings::new(dx, case.dt(), case.viscosity(), case.fluid_density)?.with_smoothing(case.smoothing_cells * dx)?;
+            FluidSettings::new(dx, case.dt(), case.viscosity(), case.fluid_density)?.with_smoothing(case.smoothing_cells * dx)?.with_force_method(case.force_method);
         let mut fluid = Fluid::new(Vector::ZERO, Vector::splat(l), [true; 3], settings)?;
         for &(_, c) in &particles {
             fluid.couple(&world, c)?;
