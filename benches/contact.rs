@@ -1,6 +1,7 @@
 //! Time per contact evaluation (overlap geometry + force) for three pair types, both
 //! integration modes, N_c = 4, 8, 16: from the bodies' bounding boxes (a first touch, the most
-//! expensive case), and as a persistent contact seeded with the previous sub-step's box.
+//! expensive case), and as a persistent contact seeded with the previous sub-step's box; and
+//! the sphere pair in closed form (`OverlapSettings::with_closed_form_spheres`).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use discrete_contact::prelude::*;
@@ -59,6 +60,19 @@ fn bench(c: &mut Criterion) {
             }
         }
     }
+    let (_, sa, pa, sb, pb) = pairs().remove(0);
+    let closed = OverlapSettings::new(8, IntegrationMode::Subcell).unwrap().with_closed_form_spheres(true);
+    let model = ContactModel::new(params, closed);
+    let a = BodyState::at_rest(&sa, pa).moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO);
+    let b = BodyState::at_rest(&sb, pb);
+    let mut state = None;
+    model.evaluate(&a, &b, &mut state).unwrap();
+    group.bench_function("sphere_sphere/closed_form/persistent", |bch| {
+        bch.iter(|| {
+            let mut s = state;
+            model.evaluate(&a, &b, &mut s).unwrap()
+        })
+    });
     group.finish();
 }
 

@@ -13,7 +13,8 @@
 //! `--peer-steps 100`, `--youngs` (Pa; 5 kPa, 50 kPa with `--quick`), `--nc 8` (sub-cell
 //! cells across a contact's overlap, in every run including the peer case and the
 //! performance table), `--forcing-momentum` (the fluid's force on the particles as the EDM
-//! forcing's momentum instead of the link-wise momentum exchange; every run).
+//! forcing's momentum instead of the link-wise momentum exchange; every run),
+//! `--closed-form-spheres` (sphere pairs' overlaps in closed form instead of on the grid).
 //!
 //! `--perf-table` times `--perf-steps` (default 600) steps at φ = 10, 20, 30 % with and
 //! without contacts in an 8 D and a 15 D box at the quick resolution (D = 6 Δx, E = 50 kPa):
@@ -265,6 +266,7 @@ fn seed_case(args: &common::Args, shape: ParticleShape, phi: f64, ar: f64) -> Re
     if args.flag("--forcing-momentum") {
         c.force_method = ForceMethod::Forcing;
     }
+    c.closed_form_spheres = args.flag("--closed-form-spheres");
     Ok(c)
 }
 

@@ -50,6 +50,19 @@ pub trait Sdf: Send + Sync {
         let _ = (p, q, offset);
         None
     }
+
+    /// The radius, when the body is a sphere about its frame's origin (for the closed-form
+    /// overlap of [`OverlapSettings::with_closed_form_spheres`](crate::OverlapSettings::with_closed_form_spheres));
+    /// `None` (the default) otherwise.
+    fn sphere_radius(&self) -> Option<Real> {
+        None
+    }
+
+    /// The outward unit normal, when the body is the half-space `n·x <= 0` of its frame (for
+    /// the same closed form); `None` (the default) otherwise.
+    fn half_space_normal(&self) -> Option<Vector> {
+        None
+    }
 }
 
 /// Exact 2D signed distance to a convex polygon given counter-clockwise, with its gradient.
@@ -595,6 +608,20 @@ impl Sdf for ConvexShape {
             _ => return None,
         };
         t.is_finite().then(|| t.clamp(0.0, 1.0))
+    }
+
+    fn sphere_radius(&self) -> Option<Real> {
+        match self {
+            Self::Ball { radius } => Some(*radius),
+            _ => None,
+        }
+    }
+
+    fn half_space_normal(&self) -> Option<Vector> {
+        match self {
+            Self::HalfSpace { normal } => Some(*normal),
+            _ => None,
+        }
     }
 
     fn local_bounds(&self) -> Aabb {

@@ -291,3 +291,53 @@ fn a_contact_begun_at_a_vanishing_overlap_is_kept_when_it_deepens() {
     let fresh = m.evaluate(&at(r - d), &wall, &mut None).unwrap().unwrap();
     assert_relative_eq!(deeper.geometry.volume, fresh.geometry.volume, max_relative = 0.05);
 }
+
+/// The closed-form overlap of sphere pairs (a lens of two caps; one cap on a half-space) is what
+/// the grid integration converges to: against sub-cell N_c = 64 on random pairs of radii,
+/// depths, orientations and contact enlargements, with either body as A. Apart pairs are
+/// apart in both.
+#[test]
+fn closed_form_sphere_overlaps_match_the_fine_grid() {
+    use discrete_contact::compute_overlap;
+    let fine = settings(64, IntegrationMode::Subcell);
+    let mut seed = 12345u64;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut worst = [0.0f64; 4];
+    for k in 0..40 {
+        let (ra, rb) = (0.5 + rnd(), 0.5 + rnd());
+        let eps = [0.02 * rnd(), 0.02 * rnd()];
+        let dir = Vector::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
+        let depth = 0.3 * rnd() * ra.min(rb);
+        let rot = Rotation::from_axis_angle(Vector::new(rnd(), rnd(), 1.0).normalize(), 6.0 * rnd());
+        let half_space = k % 2 == 1;
+        let b = if half_space { ConvexShape::half_space(dir).unwrap() } else { ConvexShape::ball(rb).unwrap() };
+        let pose_b = Pose::from_parts(Vector::new(rnd(), rnd(), rnd()), if half_space { Rotation::IDENTITY } else { rot });
+        let reach = if half_space { ra } else { ra + rb };
+        let pose_a = Pose::from_parts(pose_b.translation + dir * (reach + eps[0] + eps[1] - depth), rot);
+        let a = ConvexShape::ball(ra).unwrap();
+        for swap in [false, true] {
+            let s = fine.with_enlargement(eps[0], eps[1]).unwrap();
+            let (s, x, px, y, py) = if swap { (fine.with_enlargement(eps[1], eps[0]).unwrap(), &b, &pose_b, &a, &pose_a) } else { (s, &a, &pose_a, &b, &pose_b) };
+            let grid = compute_overlap(x, px, y, py, &s, None).unwrap().expect("overlap on the grid");
+            let exact = compute_overlap(x, px, y, py, &s.with_closed_form_spheres(true), None).unwrap().expect("overlap in closed form");
+            let errs = [
+                (exact.volume / grid.volume - 1.0).abs(),
+                // Against the overlap's width (a thin lens is far wider than deep).
+                (exact.contact_point - grid.contact_point).length() / (exact.volume / exact.indentation).sqrt(),
+                (exact.normal - grid.normal).length(),
+                (exact.indentation / grid.indentation - 1.0).abs(),
+            ];
+            for (w, e) in worst.iter_mut().zip(errs) {
+                *w = w.max(e);
+            }
+            assert!(errs[0] < 2e-3 && errs[1] < 1e-2 && errs[2] < 1e-3 && errs[3] < 1e-2, "pair {k} swap {swap}: {errs:?}");
+            // Pulled apart: no overlap either way.
+            let apart = Pose::from_parts(px.translation + exact.normal * (1.01 * exact.indentation), px.rotation);
+            assert!(compute_overlap(x, &apart, y, py, &s.with_closed_form_spheres(true), None).unwrap().is_none());
+        }
+    }
+    println!("largest differences (volume, point / width, normal, indentation): {:.2e} {:.2e} {:.2e} {:.2e}", worst[0], worst[1], worst[2], worst[3]);
+}

@@ -19,6 +19,7 @@
 //! a thin overlap, refinement while the hits fill a small part of the searched box, and a
 //! located seed when every ray misses.
 
+mod closed_form;
 mod count;
 mod correction;
 mod subcell;
@@ -57,13 +58,30 @@ pub struct OverlapSettings {
     n_c: usize,
     mode: IntegrationMode,
     enlargement: [Real; 2],
+    closed_form_spheres: bool,
 }
 
 impl OverlapSettings {
     /// `n_c >= 1` grid cells per direction on the overlap's box.
     pub fn new(n_c: usize, mode: IntegrationMode) -> Result<Self> {
         check_range("n_c", n_c as Real, 1.0, true, 1024.0, true, "integer 1 <= N_c <= 1024")?;
-        Ok(Self { n_c, mode, enlargement: [0.0; 2] })
+        Ok(Self { n_c, mode, enlargement: [0.0; 2], closed_form_spheres: false })
+    }
+
+    /// Sphere–sphere and sphere–half-space pairs get their overlap in closed form (a lens of
+    /// two spherical caps, one cap on a plane) instead of on the grid: what the grid integration
+    /// converges to as `N_c` grows, in a few operations instead of ~0.35 ms per sphere pair
+    /// (sub-cell, `N_c = 8`). Every other pair — and a configuration the closed form does not
+    /// cover, such as one sphere inside the other — is integrated on the grid as before. Off
+    /// by default: the grid is the model, and the validations measure it.
+    pub fn with_closed_form_spheres(mut self, on: bool) -> Self {
+        self.closed_form_spheres = on;
+        self
+    }
+
+    /// Whether sphere pairs are computed in closed form.
+    pub fn closed_form_spheres(&self) -> bool {
+        self.closed_form_spheres
     }
 
     /// Contact enlargement `ε_A, ε_B >= 0` (m): a node is inside when `d_A <= ε_A` and `d_B <= ε_B`.
@@ -360,6 +378,11 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 ) -> Result<Option<OverlapGeometry>> {
     pose_check("pose of body A", pose_a)?;
     pose_check("pose of body B", pose_b)?;
+    if settings.closed_form_spheres {
+        if let Some(decided) = closed_form::overlap(a, pose_a, b, pose_b, settings.enlargement) {
+            return Ok(decided);
+        }
+    }
     // The grid lives in A's or B's frame, whichever gives the smaller rough box: it moves
     // rigidly with the pair, does not depend on which body is called A, and keeps elongated
     // bodies' boxes tight (a half-space's own frame is the only one bounding it).
@@ -594,5 +617,7 @@ fn finish<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     Some(OverlapGeometry { volume: integral.volume, contact_point: x_c, normal, indentation, surface_area: integral.surface_area, corrected_box })
 }
 
-deserialize_checked!(OverlapSettings via SettingsFields { n_c: usize, mode: IntegrationMode, enlargement: [Real; 2] }
-    => |f| OverlapSettings::new(f.n_c, f.mode).and_then(|s| s.with_enlargement(f.enlargement[0], f.enlargement[1])));
+deserialize_checked!(OverlapSettings via SettingsFields { n_c: usize, mode: IntegrationMode, enlargement: [Real; 2], closed_form_spheres: bool }
+    => |f| OverlapSettings::new(f.n_c, f.mode)
+        .and_then(|s| s.with_enlargement(f.enlargement[0], f.enlargement[1]))
+        .map(|s| s.with_closed_form_spheres(f.closed_form_spheres)));

@@ -97,6 +97,9 @@ pub struct HinderedSettling {
     pub contacts: bool,
     /// How the lattice measures the fluid's force on the particles.
     pub force_method: ForceMethod,
+    /// Sphere pairs' overlaps in closed form instead of on the `N_c` grid
+    /// ([`OverlapSettings::with_closed_form_spheres`]); cubes always use the grid.
+    pub closed_form_spheres: bool,
     /// Simulated time in units of `D / U`, `U` the Stokes velocity `(ρ_p/ρ_f − 1) g D² / (18 ν)`.
     pub duration: Real,
     /// Averaging starts at this fraction of the duration (after the transient).
@@ -131,6 +134,7 @@ impl HinderedSettling {
             smoothing_cells: 0.5,
             contacts: true,
             force_method: ForceMethod::default(),
+            closed_form_spheres: false,
             duration: 200.0,
             averaging_start: 0.5,
             seed: 2,
@@ -410,7 +414,7 @@ impl SettlingRun {
         fluid.balance_weight(&world)?;
         let contacts = if case.contacts {
             let half = 0.5 * case.enlargement_cells * dx;
-            let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?;
+            let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?.with_closed_form_spheres(case.closed_form_spheres);
             let mut c = DiscreteContacts::new(overlap, case.restitution)?
                 .with_friction(case.friction)
                 .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 })

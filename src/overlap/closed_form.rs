@@ -1,0 +1,106 @@
+//! Exact overlap geometry where it has a closed form: two spheres (a lens of two spherical
+//! caps) and a sphere on a half-space (one cap). Opt-in through
+//! [`OverlapSettings::with_closed_form_spheres`](super::OverlapSettings::with_closed_form_spheres):
+//! it returns what the grid integration converges to as `N_c` grows, at the cost of a few
+//! arithmetic operations instead of ~0.35 ms (sphere pair, sub-cell `N_c = 8`).
+//!
+//! With `V_cap(h, R) = π h² (3R − h) / 3` and the centroid of a cap `3 (2R − h)² / (4 (3R − h))`
+//! from its sphere's centre, the overlap is the sum of the caps; its indentation is the caps'
+//! heights added along the line of centres (which passes through the centroid), and its surface
+//! the caps' areas `2π R h` (plus the flat disc on a half-space).
+
+use parry3d_f64::bounding_volume::Aabb;
+
+use super::OverlapGeometry;
+use crate::math::{Pose, Real, Vector};
+use crate::shape::Sdf;
+
+use std::f64::consts::PI;
+
+/// Volume of a cap of height `h` cut from a sphere of radius `r`.
+fn cap_volume(h: Real, r: Real) -> Real {
+    PI * h * h * (3.0 * r - h) / 3.0
+}
+
+/// Distance from the sphere's centre to the centroid of a cap of height `h`.
+fn cap_centroid(h: Real, r: Real) -> Real {
+    3.0 * (2.0 * r - h).powi(2) / (4.0 * (3.0 * r - h))
+}
+
+/// The overlap of `a` and `b` (dilated by `eps`) when both are spheres, or one a sphere and the
+/// other a half-space: `Some(Some(g))` when they overlap partly, `Some(None)` when they are
+/// apart. `None` when the pair is of another kind or the configuration is one the closed form
+/// does not cover (one body inside the other, concentric spheres): the caller integrates on the
+/// grid then.
+pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(a: &A, pose_a: &Pose, b: &B, pose_b: &Pose, eps: [Real; 2]) -> Option<Option<OverlapGeometry>> {
+    match (a.sphere_radius(), b.sphere_radius()) {
+        (Some(ra), Some(rb)) => lens(pose_a.translation, ra + eps[0], pose_b.translation, rb + eps[1], pose_b),
+        (Some(ra), None) => {
+            let n = pose_b.rotation * b.half_space_normal()?;
+            // The half-space `n·(x − t_B) <= eps_B`; A's cap beyond it, normal from B to A.
+            cap_on_plane(pose_a.translation, ra + eps[0], n, n.dot(pose_b.translation) + eps[1], n, pose_b)
+        }
+        (None, Some(rb)) => {
+            let n = pose_a.rotation * a.half_space_normal()?;
+            cap_on_plane(pose_b.translation, rb + eps[1], n, n.dot(pose_a.translation) + eps[0], -n, pose_b)
+        }
+        (None, None) => None,
+    }
+}
+
+/// Two spheres: A of radius `a` at `ca`, B of radius `b` at `cb`.
+fn lens(ca: Vector, a: Real, cb: Vector, b: Real, pose_b: &Pose) -> Option<Option<OverlapGeometry>> {
+    let d = (ca - cb).length();
+    if d >= a + b {
+        return Some(None);
+    }
+    if !(d > (a - b).abs() && d > 0.0) {
+        return None;
+    }
+    let n = (ca - cb) / d;
+    // Heights of A's cap (towards B) and B's cap (towards A), free of cancellation.
+    let s = a + b - d;
+    let (ha, hb) = (s * (b - a + d) / (2.0 * d), s * (a - b + d) / (2.0 * d));
+    let (va, vb) = (cap_volume(ha, a), cap_volume(hb, b));
+    let volume = va + vb;
+    let contact_point = ((ca - n * cap_centroid(ha, a)) * va + (cb + n * cap_centroid(hb, b)) * vb) / volume;
+    let geometry = OverlapGeometry {
+        volume,
+        contact_point,
+        normal: n,
+        indentation: s,
+        surface_area: 2.0 * PI * (a * ha + b * hb),
+        corrected_box: sphere_box(contact_point, a.min(b), pose_b),
+    };
+    (volume.is_finite()).then_some((volume > 0.0).then_some(geometry))
+}
+
+/// A sphere of radius `r` at `c` cut by the plane `m·x = offset` (the half-space below it);
+/// `normal` is the contact normal from B to A.
+fn cap_on_plane(c: Vector, r: Real, m: Vector, offset: Real, normal: Vector, pose_b: &Pose) -> Option<Option<OverlapGeometry>> {
+    let h = r - (m.dot(c) - offset);
+    if h <= 0.0 {
+        return Some(None);
+    }
+    if !(h < 2.0 * r) {
+        return None;
+    }
+    let volume = cap_volume(h, r);
+    let contact_point = c - m * cap_centroid(h, r);
+    let geometry = OverlapGeometry {
+        volume,
+        contact_point,
+        normal,
+        indentation: h,
+        surface_area: 2.0 * PI * r * h + PI * h * (2.0 * r - h),
+        corrected_box: sphere_box(contact_point, r, pose_b),
+    };
+    (volume.is_finite()).then_some((volume > 0.0).then_some(geometry))
+}
+
+/// A box in B's frame holding the overlap (a sphere of radius `r` about a point of it): the
+/// grid search's seed should a later sub-step fall back to it.
+fn sphere_box(at: Vector, r: Real, pose_b: &Pose) -> Aabb {
+    let local = pose_b.inverse().transform_point(at);
+    Aabb::new(local - Vector::splat(r), local + Vector::splat(r))
+}
