@@ -564,7 +564,6 @@ impl Lattice {
         self.owned = set;
     }
 
-
     /// Runs `steps` steps; stops at the first error.
     pub fn run(&mut self, steps: usize) -> Result<StepReport> {
         let mut last = StepReport::default();
@@ -877,9 +876,12 @@ impl Lattice {
     }
 }
 
+/// A neighbouring row `(dy, dz)` and the directions `(dx, i)` that point into it.
+type NeighbourRow = (i64, i64, &'static [(i64, usize)]);
+
 /// The nine rows a row's links reach, as `(dy, dz, [(dx, direction)])`: D3Q19's 18 moving
 /// directions grouped by the row they point into.
-const NEIGHBOUR_ROWS: [(i64, i64, &[(i64, usize)]); 9] = {
+const NEIGHBOUR_ROWS: [NeighbourRow; 9] = {
     const fn dirs(dy: i32, dz: i32) -> [(i64, usize); 3] {
         let mut out = [(0, 0); 3];
         let mut n = 0;

@@ -82,7 +82,8 @@ fn cap_on_plane(c: Vector, r: Real, m: Vector, offset: Real, normal: Vector, pos
     if h <= 0.0 {
         return Some(None);
     }
-    if !(h < 2.0 * r) {
+    // Sunk past its far side (or NaN): the grid decides.
+    if h >= 2.0 * r || h.is_nan() {
         return None;
     }
     let volume = cap_volume(h, r);
