@@ -3,7 +3,8 @@
 //! A minimal, fast D3Q19 homogenized lattice Boltzmann solver for particle-resolved flows:
 //! BGK collision fused with streaming in the in-place A-A pattern, exact-difference (EDM)
 //! forcing for a body force and for particles given as a solid-fraction field `d_B`, the
-//! particles' hydrodynamic force and moment gathered in the same sweep, halfway bounce-back
+//! particles' hydrodynamic force and moment gathered in the same sweep (Wen et al.'s link-wise
+//! momentum exchange, or the forcing's own momentum: [`ForceMethod`]), halfway bounce-back
 //! walls (moving allowed), periodic boundaries, one unit converter, NaN/runaway detection and
 //! VTK output.
 //!
