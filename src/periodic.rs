@@ -163,17 +163,14 @@ pub fn overlapping_spheres(spheres: &[Sphere], periodic: Option<&PeriodicBox>) -
             }
         })
     };
-    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(spheres.len());
-    for (i, s) in spheres.iter().enumerate() {
-        grid.entry(key(s.centre, [0; 3])).or_default().push(i);
-    }
+    let buckets = Buckets::new(spheres.len(), cells, spheres.iter().map(|s| key(s.centre, [0; 3])));
     let range = |d: usize| if cells[d] == 1 { 0..=0 } else { -1..=1 };
     let mut pairs = Vec::new();
     for (i, a) in spheres.iter().enumerate() {
         for oz in range(2) {
             for oy in range(1) {
                 for ox in range(0) {
-                    let Some(list) = grid.get(&key(a.centre, [ox, oy, oz])) else { continue };
+                    let list = buckets.get(key(a.centre, [ox, oy, oz]));
                     for &j in list.iter().filter(|&&j| j > i) {
                         let b = &spheres[j];
                         let shift = periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
@@ -187,6 +184,55 @@ pub fn overlapping_spheres(spheres: &[Sphere], periodic: Option<&PeriodicBox>) -
     }
     pairs.sort_by_key(|&(i, j, _)| (i, j));
     pairs
+}
+
+/// The cell list's buckets: in a box periodic along every axis a dense array of cells, filled
+/// by counting sort (no hashing; measured the larger part of a dense suspension's pair search
+/// with hashing); otherwise a hash map of the occupied cells.
+enum Buckets {
+    Dense { cells: [i64; 3], start: Vec<usize>, members: Vec<usize> },
+    Sparse(HashMap<[i64; 3], Vec<usize>>),
+}
+
+impl Buckets {
+    /// Buckets of `n` items whose cells are `homes`, on a grid of `cells` (0 along an open axis).
+    fn new(n: usize, cells: [i64; 3], homes: impl Iterator<Item = [i64; 3]>) -> Self {
+        if cells.iter().all(|&c| c > 0) {
+            let index = |k: [i64; 3]| ((k[2] * cells[1] + k[1]) * cells[0] + k[0]) as usize;
+            let homes: Vec<usize> = homes.map(index).collect();
+            let mut start = vec![0usize; (cells[0] * cells[1] * cells[2]) as usize + 1];
+            for &c in &homes {
+                start[c + 1] += 1;
+            }
+            for c in 1..start.len() {
+                start[c] += start[c - 1];
+            }
+            let mut fill = start.clone();
+            let mut members = vec![0; n];
+            for (i, &c) in homes.iter().enumerate() {
+                members[fill[c]] = i;
+                fill[c] += 1;
+            }
+            Self::Dense { cells, start, members }
+        } else {
+            let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(n);
+            for (i, k) in homes.enumerate() {
+                grid.entry(k).or_default().push(i);
+            }
+            Self::Sparse(grid)
+        }
+    }
+
+    /// The items in cell `k`, in the order given.
+    fn get(&self, k: [i64; 3]) -> &[usize] {
+        match self {
+            Self::Dense { cells, start, members } => {
+                let c = ((k[2] * cells[1] + k[1]) * cells[0] + k[0]) as usize;
+                &members[start[c]..start[c + 1]]
+            }
+            Self::Sparse(grid) => grid.get(&k).map_or(&[], |v| v.as_slice()),
+        }
+    }
 }
 
 deserialize_checked!(PeriodicBox via BoxFields { min: Vector, max: Vector, periodic: [bool; 3] }
@@ -211,7 +257,8 @@ mod tests {
                 radius: 0.05 + 0.1 * next(),
             })
             .collect();
-        for periodic in [Some(&b), None] {
+        let all = PeriodicBox::new(Vector::new(-1.0, 0.0, 2.0), Vector::new(2.0, 1.5, 4.5), [true; 3]).unwrap();
+        for periodic in [Some(&b), Some(&all), None] {
             let fast = overlapping_spheres(&spheres, periodic);
             let mut brute = Vec::new();
             for i in 0..spheres.len() {
