@@ -30,17 +30,7 @@ fn covered(lat: &mut Lattice) {
     for cz in centres(nz) {
         for cy in centres(ny) {
             for cx in centres(nx) {
-                for z in cz as usize - 5..=cz as usize + 5 {
-                    for y in cy as usize - 5..=cy as usize + 5 {
-                        for x in cx as usize - 5..=cx as usize + 5 {
-                            let arm = [x as f64 - cx, y as f64 - cy, z as f64 - cz];
-                            let d_b = hlbm::solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0, 1.0);
-                            if d_b > 0.0 {
-                                lat.particles.add(x, y, z, d_b, [1e-3, 0.0, 0.0], arm, id);
-                            }
-                        }
-                    }
-                }
+                lat.particles.add_sphere([cx, cy, cz], 4.0, 1.0, [1e-3, 0.0, 0.0], id).expect("a sphere inside the lattice");
                 id += 1;
             }
         }

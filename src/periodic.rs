@@ -195,11 +195,15 @@ enum Buckets {
 }
 
 impl Buckets {
+    /// Index of cell `k` in the dense array of a `cells` grid.
+    fn dense_index(cells: [i64; 3], k: [i64; 3]) -> usize {
+        ((k[2] * cells[1] + k[1]) * cells[0] + k[0]) as usize
+    }
+
     /// Buckets of `n` items whose cells are `homes`, on a grid of `cells` (0 along an open axis).
     fn new(n: usize, cells: [i64; 3], homes: impl Iterator<Item = [i64; 3]>) -> Self {
         if cells.iter().all(|&c| c > 0) {
-            let index = |k: [i64; 3]| ((k[2] * cells[1] + k[1]) * cells[0] + k[0]) as usize;
-            let homes: Vec<usize> = homes.map(index).collect();
+            let homes: Vec<usize> = homes.map(|k| Self::dense_index(cells, k)).collect();
             let mut start = vec![0usize; (cells[0] * cells[1] * cells[2]) as usize + 1];
             for &c in &homes {
                 start[c + 1] += 1;
@@ -227,7 +231,7 @@ impl Buckets {
     fn get(&self, k: [i64; 3]) -> &[usize] {
         match self {
             Self::Dense { cells, start, members } => {
-                let c = ((k[2] * cells[1] + k[1]) * cells[0] + k[0]) as usize;
+                let c = Self::dense_index(*cells, k);
                 &members[start[c]..start[c + 1]]
             }
             Self::Sparse(grid) => grid.get(&k).map_or(&[], |v| v.as_slice()),

@@ -1,6 +1,6 @@
 //! Single-thread profile target: 96³ periodic box, plain fluid, `STEPS` steps (env), for perf;
-//! `PARTICLES=1` covers ~20 % of the nodes with spheres of radius 4, `FORCING=1` measures their forces by the forcing
-//! momentum instead of the momentum exchange.
+//! `PARTICLES=1` covers ~20 % of the nodes with spheres of radius 4, `FORCING=1` measures
+//! their forces by the forcing momentum instead of the momentum exchange.
 fn main() {
     let steps: usize = std::env::var("STEPS").ok().and_then(|s| s.parse().ok()).unwrap_or(40);
     let particles = std::env::var("PARTICLES").is_ok();
@@ -13,17 +13,7 @@ fn main() {
         if particles {
             // Spheres of radius 4 on a 12-cell grid (~20 % of the nodes).
             for (id, c) in (0..512).map(|k| [k % 8, (k / 8) % 8, k / 64].map(|i| 12.0 * i as f64 + 6.3)).enumerate() {
-                for z in c[2] as usize - 5..=c[2] as usize + 5 {
-                    for y in c[1] as usize - 5..=c[1] as usize + 5 {
-                        for x in c[0] as usize - 5..=c[0] as usize + 5 {
-                            let arm = [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]];
-                            let d_b = hlbm::solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0, 1.0);
-                            if d_b > 0.0 {
-                                lat.particles.add(x, y, z, d_b, [1e-3, 0.0, 0.0], arm, id as u32);
-                            }
-                        }
-                    }
-                }
+                lat.particles.add_sphere(c, 4.0, 1.0, [1e-3, 0.0, 0.0], id as u32).expect("a sphere inside the lattice");
             }
         }
         let t = std::time::Instant::now();

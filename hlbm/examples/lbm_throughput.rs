@@ -86,19 +86,7 @@ fn add_particles(lat: &mut Lattice, fraction: f64) -> usize {
         while y < ny as f64 {
             let mut x = spacing / 2.0;
             while x < nx as f64 {
-                for dz in -5i64..=5 {
-                    for dy in -5i64..=5 {
-                        for dx in -5i64..=5 {
-                            let p = [x.floor() as i64 + dx, y.floor() as i64 + dy, z.floor() as i64 + dz];
-                            let d = ((p[0] as f64 - x).powi(2) + (p[1] as f64 - y).powi(2) + (p[2] as f64 - z).powi(2)).sqrt() - r;
-                            let db = hlbm::solid_fraction(d, 1.0);
-                            let w = |v: i64, n: usize| v.rem_euclid(n as i64) as usize;
-                            if db > 0.0 {
-                                lat.particles.add(w(p[0], nx), w(p[1], ny), w(p[2], nz), db, [1e-3, 0.0, 0.0], [p[0] as f64 - x, p[1] as f64 - y, p[2] as f64 - z], id);
-                            }
-                        }
-                    }
-                }
+                lat.particles.add_sphere([x, y, z], r, 1.0, [1e-3, 0.0, 0.0], id).expect("a sphere inside the lattice");
                 id += 1;
                 x += spacing;
             }

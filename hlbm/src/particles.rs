@@ -1,6 +1,8 @@
 //! The per-node particle field of HLBM: which nodes a particle covers, how much (`d_B`), and
 //! the particle's velocity there. Stored per row and sparse, so fluid-only rows pay nothing.
 
+use crate::error::{Error, Result};
+
 /// One node covered by a particle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -61,6 +63,50 @@ impl ParticleField {
                 self.count += 1;
             }
         }
+    }
+
+    /// Adds a sphere of `radius` about `centre` with smoothing width `smoothing`, translating
+    /// with `velocity`, as particle `id` (lattice units): every node where its `d_B`
+    /// ([`solid_fraction`]) is positive, with the lever arm node − centre. The centre may lie
+    /// anywhere; node indices wrap periodically (a wall node is covered like any other — leave
+    /// the walls out of its reach).
+    ///
+    /// Refuses, naming the parameter, a radius or smoothing width that is not finite and
+    /// positive, a non-finite centre or velocity, and a sphere whose reach `2 (radius +
+    /// smoothing/2)` is not below every dimension of the lattice (it would cover nodes twice).
+    pub fn add_sphere(&mut self, centre: [f64; 3], radius: f64, smoothing: f64, velocity: [f64; 3], id: u32) -> Result<()> {
+        let bad = |name, value, allowed| Err(Error::InvalidParameter { name, value, allowed });
+        let dims = [self.nx, self.ny, self.rows.len() / self.ny];
+        if !(radius > 0.0 && radius.is_finite()) {
+            return bad("radius", radius, "0 < radius (finite)");
+        }
+        if !(smoothing > 0.0 && smoothing.is_finite()) {
+            return bad("smoothing", smoothing, "0 < smoothing (finite)");
+        }
+        if let Some(&c) = centre.iter().find(|c| !c.is_finite()) {
+            return bad("centre", c, "finite coordinates");
+        }
+        if let Some(&v) = velocity.iter().find(|v| !v.is_finite()) {
+            return bad("velocity", v, "finite components");
+        }
+        let reach = radius + 0.5 * smoothing;
+        if dims.iter().any(|&n| 2.0 * reach >= n as f64) {
+            return bad("radius", radius, "2 (radius + smoothing/2) below every lattice dimension");
+        }
+        let (lo, hi) = (centre.map(|c| (c - reach).floor() as i64), centre.map(|c| (c + reach).ceil() as i64));
+        let wrap = |i: i64, d: usize| i.rem_euclid(dims[d] as i64) as usize;
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let arm = [x as f64 - centre[0], y as f64 - centre[1], z as f64 - centre[2]];
+                    let d_b = solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - radius, smoothing);
+                    if d_b > 0.0 {
+                        self.add(wrap(x, 0), wrap(y, 1), wrap(z, 2), d_b, velocity, arm, id);
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Refills the whole field slab by slab, on all cores: `fill(z, push)` calls

@@ -70,17 +70,7 @@ fn moving_sphere(lat: &mut Lattice, v: [f64; 3]) {
     lat.particles.clear();
     let [nx, ny, nz] = lat.dims();
     let c = [nx as f64 / 2.0 - 0.3, ny as f64 / 2.0 + 0.2, nz as f64 / 2.0];
-    for z in 0..nz {
-        for y in 0..ny {
-            for x in 0..nx {
-                let d = ((x as f64 - c[0]).powi(2) + (y as f64 - c[1]).powi(2) + (z as f64 - c[2]).powi(2)).sqrt() - 4.0;
-                let db = hlbm::solid_fraction(d, 1.0);
-                if db > 0.0 {
-                    lat.particles.add(x, y, z, db, v, [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]], 7);
-                }
-            }
-        }
-    }
+    lat.particles.add_sphere(c, 4.0, 1.0, v, 7).expect("a sphere inside the lattice");
 }
 
 #[test]
@@ -305,4 +295,51 @@ fn a_particle_at_rest_against_a_wall_feels_no_force() {
             assert!(f.iter().all(|c| c.abs() < 1e-12), "{method:?}: force {f:?} on a particle at rest");
         }
     }
+}
+
+/// `ParticleField::add_sphere` covers exactly the nodes a brute-force sweep of the whole
+/// lattice finds (`solid_fraction` of the distance to the nearest periodic image of the
+/// centre), with the same `d_B`, wherever the centre lies — across the periodic corner too —
+/// and refuses bad input by name.
+#[test]
+fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
+    let name = |e: Error| match e {
+        Error::InvalidParameter { name, .. } => name,
+        other => panic!("{other:?}"),
+    };
+    let dims = [16usize, 14, 12];
+    for centre in [[7.3, 6.6, 5.1], [0.3, 13.6, 0.1]] {
+        let mut lat = Lattice::new(dims[0], dims[1], dims[2], 0.8).unwrap();
+        lat.particles.add_sphere(centre, 4.0, 1.0, [0.0; 3], 1).unwrap();
+        let mut expected = 0;
+        for z in 0..dims[2] {
+            for y in 0..dims[1] {
+                let row = lat.particles.row(z * dims[1] + y);
+                for x in 0..dims[0] {
+                    let image = |p: usize, d: usize| {
+                        let v = p as f64 - centre[d];
+                        v - dims[d] as f64 * (v / dims[d] as f64).round()
+                    };
+                    let arm = [image(x, 0), image(y, 1), image(z, 2)];
+                    let d_b = hlbm::solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0, 1.0);
+                    let found = row.iter().find(|n| n.x as usize == x);
+                    if d_b > 0.0 {
+                        expected += 1;
+                        let n = found.unwrap_or_else(|| panic!("node ({x}, {y}, {z}) missing"));
+                        assert!((n.d_b - d_b).abs() < 1e-12 && (0..3).all(|d| (n.arm[d] - arm[d]).abs() < 1e-12), "node ({x}, {y}, {z})");
+                    } else {
+                        assert!(found.is_none(), "node ({x}, {y}, {z}) covered");
+                    }
+                }
+            }
+        }
+        assert_eq!(lat.particles.len(), expected);
+    }
+    let mut field = hlbm::ParticleField::new(16, 14, 12);
+    assert_eq!(name(field.add_sphere([1.0; 3], -1.0, 1.0, [0.0; 3], 0).unwrap_err()), "radius");
+    assert_eq!(name(field.add_sphere([1.0; 3], 5.6, 1.0, [0.0; 3], 0).unwrap_err()), "radius");
+    assert_eq!(name(field.add_sphere([1.0; 3], 2.0, f64::NAN, [0.0; 3], 0).unwrap_err()), "smoothing");
+    assert_eq!(name(field.add_sphere([1.0, f64::INFINITY, 1.0], 2.0, 1.0, [0.0; 3], 0).unwrap_err()), "centre");
+    assert_eq!(name(field.add_sphere([1.0; 3], 2.0, 1.0, [0.0, f64::NAN, 0.0], 0).unwrap_err()), "velocity");
+    assert!(field.is_empty());
 }

@@ -6,7 +6,7 @@
 //! explicitly with the hydrodynamic force of the lattice and the net weight (ρ_p - ρ_f) V g —
 //! once with each of the lattice's force measures.
 
-use hlbm::{solid_fraction, ForceMethod, Lattice};
+use hlbm::{ForceMethod, Lattice};
 use hlbm::correlations::{di_felice_wall_factor, schiller_naumann_terminal_velocity};
 
 #[test]
@@ -35,18 +35,7 @@ fn settles_at_the_schiller_naumann_velocity(method: ForceMethod) {
     let mut history = Vec::new();
     for _ in 0..1500 {
         lat.particles.clear();
-        let reach = r + eps;
-        for z in (c[2] - reach).floor() as usize..=(c[2] + reach).ceil() as usize {
-            for y in (c[1] - reach).floor() as usize..=(c[1] + reach).ceil() as usize {
-                for x in (c[0] - reach).floor() as usize..=(c[0] + reach).ceil() as usize {
-                    let p = [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]];
-                    let db = solid_fraction((p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - r, eps);
-                    if db > 0.0 {
-                        lat.particles.add(x, y, z, db, v, p, 0);
-                    }
-                }
-            }
-        }
+        lat.particles.add_sphere(c, r, eps, v, 0).expect("a sphere inside the lattice");
         let report = lat.step().unwrap();
         let f = report.particle_forces[&0].force;
         let weight = [0.0, 0.0, -(ratio - 1.0) * volume * g];
