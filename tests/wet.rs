@@ -22,10 +22,12 @@ fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity_with_momentum_excha
 
 fn settles_at_the_drag_laws_terminal_velocity(method: ForceMethod) {
     // D = 9.6 mm resolved by 8 nodes, ρ_p/ρ_f = 1.06 in the Li fluid (ν = 4.08e-5 m²/s),
-    // τ = 0.6; box 8 D × 8 D × 10 D with walls: Re ≈ 5.
+    // τ = 0.6; box 16 D × 16 D × 10 D with walls: Re ≈ 9. The box is wide because Di Felice's
+    // wall factor (fitted in round tubes) over-corrects a narrow square box: measured here,
+    // 8 D wide gives +12 % against it, 12 D +6 %, 16 D +3 % with nearly the same velocity.
     let (d, dx, rho_f, nu, ratio) = (9.6e-3, 1.2e-3, 1230.0, 4.08e-5, 1.06);
     let dt = 0.1 * dx * dx / (3.0 * nu);
-    let (w, h) = (8.0 * d, 10.0 * d);
+    let (w, h) = (16.0 * d, 10.0 * d);
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::new(0.0, 0.0, -9.81);
     let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.5 * w, 0.5 * w, h - 1.5 * d)));
@@ -50,7 +52,7 @@ fn settles_at_the_drag_laws_terminal_velocity(method: ForceMethod) {
     let err = u / expected - 1.0;
     println!("{method:?}: U = {u:.5} m/s, Re = {re:.2}, Schiller–Naumann {u_inf:.5}, with walls {expected:.5}: {:+.1} % (drift {:.1} %), {} steps", err * 100.0, drift * 100.0, speeds.len());
     assert!(drift < 0.03, "not terminal: drift {drift}");
-    assert!(err.abs() < 0.06, "terminal velocity {u} vs {expected}");
+    assert!(err.abs() < 0.05, "terminal velocity {u} vs {expected}");
 }
 
 /// The Li (2010) sphere released 19.6 mm above the floor, at Δx = 1.5 mm (D = 6.3 nodes).

@@ -174,13 +174,18 @@ fn superpose(kept: &mut ParticleNode, later: &ParticleNode) {
 }
 
 /// `d_B` of a node at signed distance `d` from a particle's surface with smoothing width `eps`:
-/// 1 for `d <= -eps/2`, `cos²(π (d/eps + 1/2))` in between, 0 for `d >= eps/2`.
+/// 1 for `d <= -eps/2`, `cos²(π/2 (d/eps + 1/2))` in between (½ on the surface), 0 for
+/// `d >= eps/2`.
+///
+/// Seed 000 eq. (18) prints `cos²(π (d/eps + 1/2))`, which is not monotone across the band
+/// (1, then 0 on the surface, back to nearly 1 just before `+eps/2`, then 0); the factor ½
+/// here is the one OpenLB's HLBM uses and the one that makes `d_B` fall smoothly from 1 to 0.
 pub fn solid_fraction(d: f64, eps: f64) -> f64 {
     if d <= -0.5 * eps {
         1.0
     } else if d >= 0.5 * eps {
         0.0
     } else {
-        (std::f64::consts::PI * (d / eps + 0.5)).cos().powi(2)
+        (std::f64::consts::FRAC_PI_2 * (d / eps + 0.5)).cos().powi(2)
     }
 }

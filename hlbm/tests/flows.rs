@@ -343,3 +343,27 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
     assert_eq!(name(field.add_sphere([1.0; 3], 2.0, 1.0, [0.0, f64::NAN, 0.0], 0).unwrap_err()), "velocity");
     assert!(field.is_empty());
 }
+
+/// The solid fraction falls monotonically from 1 to 0 across the smoothing band, is ½ on the
+/// surface and symmetric about it, so a sphere's `Σ d_B` over the nodes is its volume (to the
+/// lattice's sampling error) — seed 000's printed `cos²(π (d/ε + ½))` fails all three.
+#[test]
+fn solid_fraction_falls_monotonically_and_sums_to_the_volume() {
+    let eps = 1.0;
+    let mut last = 1.0;
+    for i in 0..=200 {
+        let d = -eps + 2.0 * eps * i as f64 / 200.0;
+        let db = hlbm::solid_fraction(d, eps);
+        assert!((0.0..=1.0).contains(&db) && db <= last + 1e-15, "d_B({d}) = {db} after {last}");
+        assert!((db + hlbm::solid_fraction(-d, eps) - 1.0).abs() < 1e-12, "not symmetric at d = {d}");
+        last = db;
+    }
+    assert!((hlbm::solid_fraction(0.0, eps) - 0.5).abs() < 1e-15);
+    for radius in [3.0, 4.5, 6.0] {
+        let mut lat = Lattice::new(20, 20, 20, 0.8).unwrap();
+        lat.particles.add_sphere([9.71, 10.13, 9.37], radius, eps, [0.0; 3], 1).unwrap();
+        let sum: f64 = (0..400).flat_map(|r| lat.particles.row(r).iter().map(|n| n.d_b)).sum();
+        let volume = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
+        assert!((sum / volume - 1.0).abs() < 0.02, "radius {radius}: Σ d_B = {sum}, volume {volume}");
+    }
+}

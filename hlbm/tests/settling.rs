@@ -1,10 +1,15 @@
 //! A single sphere settling in a large closed box reaches the terminal velocity of the
 //! Schiller–Naumann drag law, corrected for the box walls (Di Felice 1996).
 //!
-//! Box: 10 D × 10 D × 16 D (D = 8 cells), halfway bounce-back on all faces; τ = 0.6;
+//! Box: 16 D × 16 D × 16 D (D = 8 cells), halfway bounce-back on all faces; τ = 0.6;
 //! ρ_p/ρ_f = 2; smoothing width 1 cell. The sphere's equation of motion is integrated
 //! explicitly with the hydrodynamic force of the lattice and the net weight (ρ_p - ρ_f) V g —
 //! once with each of the lattice's force measures.
+//!
+//! The box is wide because the wall correction is only trusted where it is small: measured
+//! with this set-up, U/U_SN is 0.938 / 0.946 / 0.947 in boxes 10 / 16 / 24 D wide (momentum
+//! exchange), the same at D = 12 cells, while Di Felice's factor (fitted in round tubes) says
+//! 0.864 / 0.915 / 0.943 — it over-corrects a square box of 10 D by ~8 %.
 
 use hlbm::{ForceMethod, Lattice};
 use hlbm::correlations::{di_felice_wall_factor, schiller_naumann_terminal_velocity};
@@ -23,7 +28,7 @@ fn settles_at_the_schiller_naumann_velocity(method: ForceMethod) {
     let (d, tau, ratio, eps) = (8.0f64, 0.6, 2.0, 1.0);
     let nu = (tau - 0.5) / 3.0;
     let g = 8e-4; // lattice units: Re ≈ 10
-    let (nx, ny, nz) = (80usize, 80usize, 128usize);
+    let (nx, ny, nz) = (128usize, 128usize, 128usize);
     let mut lat = Lattice::new(nx, ny, nz, tau).unwrap();
     lat.close_faces([false, false, false]);
     lat.set_force_method(method);
