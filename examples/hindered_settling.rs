@@ -18,7 +18,8 @@
 //!
 //! `--perf-table` times `--perf-steps` (default 600) steps at φ = 10, 20, 30 % with and
 //! without contacts in an 8 D and a 15 D box at the quick resolution (D = 6 Δx, E = 50 kPa):
-//! MLUPs, seconds per 1000 steps and the time split, in `hindered_settling_perf.csv`.
+//! MLUPs, seconds per 1000 steps and the time split, in `hindered_settling_perf.csv`
+//! (`--perf-box-d 15` and `--perf-phi 0.3` pick cases).
 //!
 //! Long runs: `--checkpoint-every N` saves each case every N steps (and when it ends) to
 //! `target/validation/checkpoints/`; after a stop, the same command with `--resume` goes on
@@ -330,7 +331,7 @@ fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn 
     let mut rows = Vec::new();
     println!("{:>5} {:>6} {:>5} {:>9} {:>8} {:>10} {:>9} {:>9} {:>10}", "box_D", "nodes", "phi", "contacts", "N", "s/1000", "MLUPs", "contacts%", "max_contacts");
     for box_d in args.list("--perf-box-d", &[8.0, 15.0]) {
-        for phi in [0.1, 0.2, 0.3] {
+        for &phi in &args.list("--perf-phi", &[0.1, 0.2, 0.3]) {
             for contacts in [true, false] {
                 let mut case = seed_case(args, ParticleShape::Sphere, phi, 1000.0)?;
                 case.nodes_per_diameter = 6.0;

@@ -146,6 +146,8 @@ pub mod force;
 pub mod io;
 pub mod material;
 pub mod overlap;
+#[cfg(feature = "rapier")]
+mod neighbours;
 pub mod periodic;
 #[cfg(feature = "rapier")]
 pub mod rapier;

@@ -49,7 +49,8 @@ use crate::force::BodyKinematics;
 use crate::material::{effective_modulus, hertz_contact_time, Friction, Material, PairParameters, StiffnessFactor};
 use crate::math::{Pose, Real, Vector};
 use crate::overlap::OverlapSettings;
-use crate::periodic::{overlapping_spheres, PeriodicBox, Sphere};
+use crate::neighbours::NeighbourList;
+use crate::periodic::{PeriodicBox, Sphere};
 use crate::shape::{ConvexShape, Sdf};
 
 /// What to do when the user's step cannot resolve a contact.
@@ -113,6 +114,9 @@ pub struct StepStats {
     pub contacts: usize,
     /// Largest indentation seen during the step (m).
     pub max_indentation: Real,
+    /// Times the bounding-sphere neighbour list was rebuilt during the step (usually 0: it
+    /// lasts until some body has moved a fifth of its bounding radius; see `neighbours`).
+    pub neighbour_builds: usize,
 }
 
 /// Rapier keeps user forces across steps: takes back out forces and torques this crate added
@@ -139,6 +143,21 @@ pub struct DiscreteContacts {
     states: HashMap<(ColliderHandle, ColliderHandle), ContactState>,
     periodic: Option<PeriodicBox>,
     indentation_limit: Real,
+    /// Bumped whenever the handled set changes.
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    generation: u64,
+    /// The neighbour search's memory; rebuilt from the bodies when empty (after a restart).
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    neighbours: std::sync::Mutex<Neighbours>,
+}
+
+/// The handled bounded colliders in handle order (for the generation of the handled set they
+/// were taken from) and their Verlet list.
+#[derive(Default)]
+struct Neighbours {
+    generation: Option<u64>,
+    bounded: Vec<ColliderHandle>,
+    list: NeighbourList,
 }
 
 /// Wraps the user's hooks: handled pairs get no rapier contact response.
@@ -179,6 +198,8 @@ impl DiscreteContacts {
             states: HashMap::new(),
             periodic: None,
             indentation_limit: 0.5,
+            generation: 0,
+            neighbours: Default::default(),
         })
     }
 
@@ -249,6 +270,7 @@ impl DiscreteContacts {
         };
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
         self.handled.insert(collider, Handled { shape, material, centre, radius, half_size });
+        self.generation += 1;
         Ok(())
     }
 
@@ -284,6 +306,7 @@ impl DiscreteContacts {
     pub fn step_with_events(&mut self, world: &mut PhysicsWorld, hooks: &dyn PhysicsHooks, events: &dyn EventHandler) -> Result<StepStats> {
         let dt = world.integration_parameters.dt;
         check_positive("integration_parameters.dt", dt)?;
+        let builds = self.neighbour_builds();
         let substeps = self.substeps(world, dt)?;
         let saved = (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
         world.integration_parameters.dt = dt / substeps as Real;
@@ -306,6 +329,7 @@ impl DiscreteContacts {
         result?;
         self.wrap_bodies(world);
         stats.contacts = self.states.len();
+        stats.neighbour_builds = self.neighbour_builds() - builds;
         Ok(stats)
     }
 
@@ -433,66 +457,86 @@ impl DiscreteContacts {
     }
 
     /// Handled pairs that may touch now: rapier's broad-phase pairs of handled colliders — or,
-    /// in a periodic box, the bounded pairs whose grown bounding spheres meet through the
-    /// faces (with the image shift) and rapier's pairs with a half-space.
+    /// in a periodic box, the bounded pairs whose bounding spheres grown by the contact margin
+    /// meet through the faces (with the image shift) and rapier's pairs with a half-space.
     fn candidate_pairs(&self, world: &PhysicsWorld) -> Result<Vec<Candidate>> {
-        let rapier_pairs = world
-            .narrow_phase
-            .contact_pairs()
-            .map(|p| (p.collider1, p.collider2))
-            .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b));
-        let Some(periodic) = self.periodic else {
+        let rapier_pairs = self.rapier_pairs(world);
+        let Some(_) = self.periodic else {
             return Ok(rapier_pairs.map(|(a, b)| (a, b, Vector::ZERO)).collect());
         };
         let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
         let mut pairs: Vec<Candidate> =
             rapier_pairs.filter(|(a, b)| unbounded(a) || unbounded(b)).map(|(a, b)| (a, b, Vector::ZERO)).collect();
-        let margin = 0.5 * (self.settings.enlargement()[0] + self.settings.enlargement()[1]);
-        pairs.extend(self.sphere_pairs(world, Some(&periodic), |_, _| margin)?);
+        let margin = self.margin();
+        pairs.extend(self.sphere_pairs(world, |_, _| margin)?);
         Ok(pairs)
     }
 
+    /// Rapier's broad-phase pairs of two handled colliders.
+    fn rapier_pairs<'w>(&'w self, world: &'w PhysicsWorld) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
+        world
+            .narrow_phase
+            .contact_pairs()
+            .map(|p| (p.collider1, p.collider2))
+            .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b))
+    }
+
+    /// Half the contact enlargement of a pair: each bounding sphere grows by it.
+    fn margin(&self) -> Real {
+        0.5 * (self.settings.enlargement()[0] + self.settings.enlargement()[1])
+    }
+
     /// Pairs of handled bounded colliders, at least one on a dynamic body, whose bounding
-    /// spheres grown by `grow(collider, kinematics)` meet (through the periodic faces when a box
-    /// is given); in a fixed order.
-    fn sphere_pairs(
-        &self,
-        world: &PhysicsWorld,
-        periodic: Option<&PeriodicBox>,
-        grow: impl Fn(&Handled, &BodyKinematics) -> Real,
-    ) -> Result<Vec<Candidate>> {
-        let mut bounded: Vec<(ColliderHandle, Sphere, bool)> = self
-            .handled
-            .iter()
-            .filter(|(_, h)| h.radius.is_finite())
-            .map(|(&c, h)| {
-                let (pose, k, _, mass) = Self::kinematics(world, c);
-                (c, Sphere { centre: pose.transform_point(h.centre), radius: h.radius + grow(h, &k) }, mass.is_finite())
-            })
-            .collect();
-        bounded.sort_by_key(|(c, _, _)| c.into_raw_parts());
-        let spheres: Vec<Sphere> = bounded.iter().map(|b| b.1).collect();
-        if let Some(p) = periodic {
-            let largest = spheres.iter().map(|s| s.radius).fold(0.0, Real::max);
-            p.check_reach(2.0 * largest)?;
+    /// spheres grown by `reach(collider, kinematics)` each meet (through the periodic faces
+    /// when a box is set); in handle order. Answered from the Verlet list (see `neighbours`).
+    fn sphere_pairs(&self, world: &PhysicsWorld, reach: impl Fn(&Handled, &BodyKinematics) -> Real) -> Result<Vec<Candidate>> {
+        let mut guard = self.neighbours.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let n = &mut *guard;
+        if n.generation != Some(self.generation) {
+            n.bounded = self.handled.iter().filter(|(_, h)| h.radius.is_finite()).map(|(&c, _)| c).collect();
+            n.bounded.sort_by_key(|c| c.into_raw_parts());
+            n.list = NeighbourList::default();
+            n.generation = Some(self.generation);
         }
-        Ok(overlapping_spheres(&spheres, periodic)
-            .into_iter()
-            .filter(|&(i, j, _)| bounded[i].2 || bounded[j].2)
-            .map(|(i, j, shift)| (bounded[i].0, bounded[j].0, shift))
-            .collect())
+        let count = n.bounded.len();
+        let (mut spheres, mut reaches, mut mobile) = (Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count));
+        for c in &n.bounded {
+            let h = &self.handled[c];
+            let (pose, k, _, mass) = Self::kinematics(world, *c);
+            spheres.push(Sphere { centre: pose.transform_point(h.centre), radius: h.radius });
+            reaches.push(reach(h, &k));
+            mobile.push(mass.is_finite());
+        }
+        let found = n.list.query(&spheres, &reaches, self.periodic.as_ref())?;
+        Ok(found.into_iter().filter(|&(i, j, _)| mobile[i] || mobile[j]).map(|(i, j, shift)| (n.bounded[i], n.bounded[j], shift)).collect())
+    }
+
+    /// How many times the neighbour list has been built.
+    fn neighbour_builds(&self) -> usize {
+        self.neighbours.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).list.builds()
     }
 
     /// Handled pairs that may touch during the next `dt`: the candidates, plus pairs whose
     /// bounding spheres (or sphere and half-space) can meet at their current speeds — rapier
     /// only knows a pair after a step has run its broad phase, too late for a fast stiff impact.
     fn lookahead_pairs(&self, world: &PhysicsWorld, dt: Real) -> Result<Vec<(ColliderHandle, ColliderHandle)>> {
-        let mut pairs: Vec<(ColliderHandle, ColliderHandle)> =
-            self.candidate_pairs(world)?.into_iter().map(|(a, b, _)| (a, b)).collect();
         let speed = |h: &Handled, k: &BodyKinematics| k.linvel.length() + if h.radius.is_finite() { k.angvel.length() * h.radius } else { 0.0 };
-        let known: std::collections::HashSet<(ColliderHandle, ColliderHandle)> = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
-        let reached = self.sphere_pairs(world, self.periodic.as_ref(), |h, k| speed(h, k) * dt)?;
-        pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)).filter(|p| !known.contains(p)));
+        let margin = self.margin();
+        // Spheres grown by the margin and the distance they travel: the periodic candidates
+        // and more.
+        let reached = self.sphere_pairs(world, |h, k| margin + speed(h, k) * dt)?;
+        let mut pairs: Vec<(ColliderHandle, ColliderHandle)>;
+        let known: std::collections::HashSet<(ColliderHandle, ColliderHandle)>;
+        if self.periodic.is_some() {
+            let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
+            pairs = self.rapier_pairs(world).filter(|(a, b)| unbounded(a) || unbounded(b)).collect();
+            known = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
+            pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)));
+        } else {
+            pairs = self.rapier_pairs(world).collect();
+            known = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
+            pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)).filter(|p| !known.contains(p)));
+        }
         // Half-spaces against bounded bodies: few half-spaces, so a plain loop.
         let mut planes: Vec<ColliderHandle> = self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
         planes.sort_by_key(|c| c.into_raw_parts());
