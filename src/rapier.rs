@@ -115,7 +115,8 @@ pub struct StepStats {
     /// Largest indentation seen during the step (m).
     pub max_indentation: Real,
     /// Times the bounding-sphere neighbour list was rebuilt during the step (usually 0: it
-    /// lasts until some body has moved a fifth of its bounding radius; see `neighbours`).
+    /// lasts until some body may have moved half its skin, a tenth of the smallest bounding
+    /// radius).
     pub neighbour_builds: usize,
 }
 
@@ -460,13 +461,10 @@ impl DiscreteContacts {
     /// in a periodic box, the bounded pairs whose bounding spheres grown by the contact margin
     /// meet through the faces (with the image shift) and rapier's pairs with a half-space.
     fn candidate_pairs(&self, world: &PhysicsWorld) -> Result<Vec<Candidate>> {
-        let rapier_pairs = self.rapier_pairs(world);
-        let Some(_) = self.periodic else {
-            return Ok(rapier_pairs.map(|(a, b)| (a, b, Vector::ZERO)).collect());
-        };
-        let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
-        let mut pairs: Vec<Candidate> =
-            rapier_pairs.filter(|(a, b)| unbounded(a) || unbounded(b)).map(|(a, b)| (a, b, Vector::ZERO)).collect();
+        if self.periodic.is_none() {
+            return Ok(self.rapier_pairs(world).map(|(a, b)| (a, b, Vector::ZERO)).collect());
+        }
+        let mut pairs: Vec<Candidate> = self.rapier_half_space_pairs(world).map(|(a, b)| (a, b, Vector::ZERO)).collect();
         let margin = self.margin();
         pairs.extend(self.sphere_pairs(world, |_, _| margin)?);
         Ok(pairs)
@@ -479,6 +477,13 @@ impl DiscreteContacts {
             .contact_pairs()
             .map(|p| (p.collider1, p.collider2))
             .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b))
+    }
+
+    /// Rapier's pairs of two handled colliders of which one is unbounded (a half-space): in a
+    /// periodic box the bounded pairs come from the neighbour list instead.
+    fn rapier_half_space_pairs<'w>(&'w self, world: &'w PhysicsWorld) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
+        let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
+        self.rapier_pairs(world).filter(move |(a, b)| unbounded(a) || unbounded(b))
     }
 
     /// Half the contact enlargement of a pair: each bounding sphere grows by it.
@@ -528,8 +533,7 @@ impl DiscreteContacts {
         let mut pairs: Vec<(ColliderHandle, ColliderHandle)>;
         let known: std::collections::HashSet<(ColliderHandle, ColliderHandle)>;
         if self.periodic.is_some() {
-            let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
-            pairs = self.rapier_pairs(world).filter(|(a, b)| unbounded(a) || unbounded(b)).collect();
+            pairs = self.rapier_half_space_pairs(world).collect();
             known = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
             pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)));
         } else {
