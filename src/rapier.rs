@@ -530,17 +530,12 @@ impl DiscreteContacts {
         // Spheres grown by the margin and the distance they travel: the periodic candidates
         // and more.
         let reached = self.sphere_pairs(world, |h, k| margin + speed(h, k) * dt)?;
-        let mut pairs: Vec<(ColliderHandle, ColliderHandle)>;
-        let known: std::collections::HashSet<(ColliderHandle, ColliderHandle)>;
-        if self.periodic.is_some() {
-            pairs = self.rapier_half_space_pairs(world).collect();
-            known = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
-            pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)));
-        } else {
-            pairs = self.rapier_pairs(world).collect();
-            known = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
-            pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)).filter(|p| !known.contains(p)));
-        }
+        // Rapier's pairs (in a periodic box only those with a half-space, the rest being the
+        // list's), then the list's pairs rapier does not know yet.
+        let mut pairs: Vec<(ColliderHandle, ColliderHandle)> =
+            if self.periodic.is_some() { self.rapier_half_space_pairs(world).collect() } else { self.rapier_pairs(world).collect() };
+        let known: std::collections::HashSet<(ColliderHandle, ColliderHandle)> = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
+        pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)).filter(|p| !known.contains(p)));
         // Half-spaces against bounded bodies: few half-spaces, so a plain loop.
         let mut planes: Vec<ColliderHandle> = self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
         planes.sort_by_key(|c| c.into_raw_parts());
