@@ -1,7 +1,8 @@
 //! Time per contact evaluation (overlap geometry + force) for three pair types, both
 //! integration modes, N_c = 4, 8, 16: from the bodies' bounding boxes (a first touch, the most
 //! expensive case), and as a persistent contact seeded with the previous sub-step's box; and
-//! the sphere pair in closed form (`OverlapSettings::with_closed_form_spheres`).
+//! the sphere pair in closed form (`OverlapSettings::with_closed_form_spheres`) and the cube
+//! pair exactly (`OverlapSettings::with_exact_polyhedra`).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use discrete_contact::prelude::*;
@@ -60,19 +61,21 @@ fn bench(c: &mut Criterion) {
             }
         }
     }
-    let (_, sa, pa, sb, pb) = pairs().remove(0);
-    let closed = OverlapSettings::new(8, IntegrationMode::Subcell).unwrap().with_closed_form_spheres(true);
-    let model = ContactModel::new(params, closed);
-    let a = BodyState::at_rest(&sa, pa).moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO);
-    let b = BodyState::at_rest(&sb, pb);
-    let mut state = None;
-    model.evaluate(&a, &b, &mut state).unwrap();
-    group.bench_function("sphere_sphere/closed_form/persistent", |bch| {
-        bch.iter(|| {
-            let mut s = state;
-            model.evaluate(&a, &b, &mut s).unwrap()
-        })
-    });
+    // The exact forms: sphere pair in closed form, cube pair as the clipped polyhedron.
+    let exact = OverlapSettings::new(8, IntegrationMode::Subcell).unwrap().with_closed_form_spheres(true).with_exact_polyhedra(true);
+    let model = ContactModel::new(params, exact);
+    for (name, sa, pa, sb, pb) in pairs().into_iter().filter(|p| p.0 != "cylinder_plane") {
+        let a = BodyState::at_rest(&sa, pa).moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO);
+        let b = BodyState::at_rest(&sb, pb);
+        let mut state = None;
+        model.evaluate(&a, &b, &mut state).unwrap();
+        group.bench_function(format!("{name}/exact/persistent"), |bch| {
+            bch.iter(|| {
+                let mut s = state;
+                model.evaluate(&a, &b, &mut s).unwrap()
+            })
+        });
+    }
     group.finish();
 }
 

@@ -14,12 +14,13 @@
 //! cells across a contact's overlap, in every run including the peer case and the
 //! performance table), `--forcing-momentum` (the fluid's force on the particles as the EDM
 //! forcing's momentum instead of the link-wise momentum exchange; every run),
-//! `--closed-form-spheres` (sphere pairs' overlaps in closed form instead of on the grid).
+//! `--closed-form-spheres` (sphere pairs' overlaps in closed form instead of on the grid),
+//! `--exact-polyhedra` (cube pairs' overlaps as the exact clipped polyhedron).
 //!
 //! `--perf-table` times `--perf-steps` (default 600) steps at φ = 10, 20, 30 % with and
 //! without contacts in an 8 D and a 15 D box at the quick resolution (D = 6 Δx, E = 50 kPa):
 //! MLUPs, seconds per 1000 steps and the time split, in `hindered_settling_perf.csv`
-//! (`--perf-box-d 15` and `--perf-phi 0.3` pick cases).
+//! (`--perf-box-d 15` and `--perf-phi 0.3` pick cases, `--perf-shape cube` times cubes).
 //!
 //! Long runs: `--checkpoint-every N` saves each case every N steps (and when it ends) to
 //! `target/validation/checkpoints/`; after a stop, the same command with `--resume` goes on
@@ -268,6 +269,7 @@ fn seed_case(args: &common::Args, shape: ParticleShape, phi: f64, ar: f64) -> Re
         c.force_method = ForceMethod::Forcing;
     }
     c.closed_form_spheres = args.flag("--closed-form-spheres");
+    c.exact_polyhedra = args.flag("--exact-polyhedra");
     Ok(c)
 }
 
@@ -328,12 +330,13 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
 /// box sizes (quick resolution), from rest: the contacts form during the run.
 fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
     let steps = args.number("--perf-steps", 600.0) as u64;
+    let shape = if args.value("--perf-shape") == Some("cube") { ParticleShape::Cube } else { ParticleShape::Sphere };
     let mut rows = Vec::new();
     println!("{:>5} {:>6} {:>5} {:>9} {:>8} {:>10} {:>9} {:>9} {:>10}", "box_D", "nodes", "phi", "contacts", "N", "s/1000", "MLUPs", "contacts%", "max_contacts");
     for box_d in args.list("--perf-box-d", &[8.0, 15.0]) {
         for &phi in &args.list("--perf-phi", &[0.1, 0.2, 0.3]) {
             for contacts in [true, false] {
-                let mut case = seed_case(args, ParticleShape::Sphere, phi, 1000.0)?;
+                let mut case = seed_case(args, shape, phi, 1000.0)?;
                 case.nodes_per_diameter = 6.0;
                 case.box_nodes = (box_d * case.nodes_per_diameter) as usize;
                 case.material = discrete_contact::Material::new(5e4, case.material.poisson_ratio())?;

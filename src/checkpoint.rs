@@ -43,8 +43,9 @@ use serde::Serialize;
 use crate::error::{CheckpointProblem, Error, Result};
 use crate::io::{io_error, write_atomically};
 
-/// The checkpoint format this build writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// The checkpoint format this build writes and reads (2: `OverlapSettings` carries
+/// `exact_polyhedra`).
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Signature at the start of every checkpoint (a non-text byte first, as PNG does, so a text
 /// file is never mistaken for one).

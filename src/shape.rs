@@ -58,6 +58,14 @@ pub trait Sdf: Send + Sync {
         None
     }
 
+    /// The face planes `(n, h)` — outward unit normal and offset, `n·p <= h` inside — when the
+    /// body is the intersection of finitely many half-spaces (for the exact overlap of
+    /// [`OverlapSettings::with_exact_polyhedra`](crate::OverlapSettings::with_exact_polyhedra));
+    /// `None` (the default) otherwise.
+    fn face_planes(&self) -> Option<Vec<(Vector, Real)>> {
+        None
+    }
+
     /// The outward unit normal, when the body is the half-space `n·x <= 0` of its frame (for
     /// the same closed form); `None` (the default) otherwise.
     fn half_space_normal(&self) -> Option<Vector> {
@@ -620,6 +628,15 @@ impl Sdf for ConvexShape {
     fn half_space_normal(&self) -> Option<Vector> {
         match self {
             Self::HalfSpace { normal } => Some(*normal),
+            _ => None,
+        }
+    }
+
+    fn face_planes(&self) -> Option<Vec<(Vector, Real)>> {
+        match self {
+            Self::Cuboid { half_extents } => Some((0..6).map(|k| (Vector::AXES[k % 3] * if k < 3 { 1.0 } else { -1.0 }, half_extents[k % 3])).collect()),
+            Self::Polyhedron(p) => Some(p.planes.clone()),
+            Self::HalfSpace { normal } => Some(vec![(*normal, 0.0)]),
             _ => None,
         }
     }

@@ -215,7 +215,7 @@ fn damaged_foreign_and_mismatched_files_are_refused_with_the_reason() {
         Err(Error::Checkpoint { problem: CheckpointProblem::Decode(why), .. }) => assert!(why.contains("youngs_modulus"), "{why}"),
         other => panic!("{other:?}"),
     }
-    checkpoint::save(&bad, "test/settings", &(0usize, discrete_contact::IntegrationMode::Subcell, [0.0f64; 2], false)).unwrap();
+    checkpoint::save(&bad, "test/settings", &(0usize, discrete_contact::IntegrationMode::Subcell, [0.0f64; 2], false, false)).unwrap();
     match checkpoint::load::<discrete_contact::OverlapSettings>(&bad, "test/settings") {
         Err(Error::Checkpoint { problem: CheckpointProblem::Decode(why), .. }) => assert!(why.contains("n_c"), "{why}"),
         other => panic!("{other:?}"),

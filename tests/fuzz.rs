@@ -77,7 +77,7 @@ prop_compose! {
         poses in (pose(), pose()),
         velocities in (velocity(), velocity()),
         material in (5.0..12.0f64, 0.0..0.5f64, 0.05..1.0f64),
-        grid in (1usize..10, any::<bool>(), any::<bool>()),
+        grid in (1usize..10, any::<bool>(), any::<bool>(), any::<bool>()),
         closeness in 0.0..1.3f64,
     ) -> PairCase {
         PairCase { kinds, scale, ratio, aspect, hulls, poses, velocities, material, grid, closeness }
@@ -97,14 +97,14 @@ struct PairCase {
     velocities: ((Vector, Vector), (Vector, Vector)),
     /// log10 E, ν, e.
     material: (Real, Real, Real),
-    /// N_c, sub-cell, friction.
-    grid: (usize, bool, bool),
+    /// N_c, sub-cell, friction, exact forms (closed-form spheres and exact polyhedra).
+    grid: (usize, bool, bool, bool),
     closeness: Real,
 }
 
 /// Checks one pair; returns whether it was in contact.
 fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
-    let PairCase { kinds, scale, ratio, aspect, hulls, poses: (pa, pb), velocities: (va, vb), material: (modulus, nu, e), grid: (n_c, subcell, friction), closeness } = c.clone();
+    let PairCase { kinds, scale, ratio, aspect, hulls, poses: (pa, pb), velocities: (va, vb), material: (modulus, nu, e), grid: (n_c, subcell, friction, exact), closeness } = c.clone();
     let s = 10f64.powf(scale);
     let (parry_a, a) = shape(kinds.0, s, aspect[0], aspect[1], &hulls.0);
     let (parry_b, b) = shape(kinds.1, s * 10f64.powf(ratio), aspect[2], aspect[3], &hulls.1);
@@ -119,7 +119,7 @@ fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
         params = params.with_friction(Friction::new(0.5, 0.3, 1e-3).unwrap());
     }
     let mode = if subcell { IntegrationMode::Subcell } else { IntegrationMode::Count };
-    let model = ContactModel::new(params, OverlapSettings::new(n_c, mode).unwrap());
+    let model = ContactModel::new(params, OverlapSettings::new(n_c, mode).unwrap().with_closed_form_spheres(exact).with_exact_polyhedra(exact));
     let ba = BodyState::at_rest(&a, pa).moving(va.0, va.1);
     let bb = BodyState::at_rest(&b, pb).moving(vb.0, vb.1);
     let ab = model.evaluate(&ba, &bb, &mut None);

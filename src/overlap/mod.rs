@@ -22,6 +22,7 @@
 mod closed_form;
 mod count;
 mod correction;
+mod polyhedra;
 mod subcell;
 
 use parry3d_f64::bounding_volume::Aabb;
@@ -59,13 +60,14 @@ pub struct OverlapSettings {
     mode: IntegrationMode,
     enlargement: [Real; 2],
     closed_form_spheres: bool,
+    exact_polyhedra: bool,
 }
 
 impl OverlapSettings {
     /// `n_c >= 1` grid cells per direction on the overlap's box.
     pub fn new(n_c: usize, mode: IntegrationMode) -> Result<Self> {
         check_range("n_c", n_c as Real, 1.0, true, 1024.0, true, "integer 1 <= N_c <= 1024")?;
-        Ok(Self { n_c, mode, enlargement: [0.0; 2], closed_form_spheres: false })
+        Ok(Self { n_c, mode, enlargement: [0.0; 2], closed_form_spheres: false, exact_polyhedra: false })
     }
 
     /// Sphere–sphere and sphere–half-space pairs get their overlap in closed form (a lens of
@@ -82,6 +84,24 @@ impl OverlapSettings {
     /// Whether sphere pairs are computed in closed form.
     pub fn closed_form_spheres(&self) -> bool {
         self.closed_form_spheres
+    }
+
+    /// Pairs of bodies bounded by planes — cuboids, convex polyhedra, one of them possibly a
+    /// half-space — get their overlap exactly: the intersection polyhedron of both bodies' face
+    /// half-spaces, its volume, centroid, facet area vectors and chord in closed form, in a
+    /// few microseconds instead of ~0.4–0.7 ms per cube pair on the grid (`N_c = 8`). It is
+    /// what the grid integration converges to as `N_c` grows, except that an enlargement moves
+    /// the faces out (sharp edges) where the grid's `d <= ε` rounds edges and corners. Every
+    /// other pair (a sphere, a cylinder, a rounded or custom body) is integrated on the grid as
+    /// before. Off by default: the grid is the model, and the validations measure it.
+    pub fn with_exact_polyhedra(mut self, on: bool) -> Self {
+        self.exact_polyhedra = on;
+        self
+    }
+
+    /// Whether pairs of planar bodies are computed exactly.
+    pub fn exact_polyhedra(&self) -> bool {
+        self.exact_polyhedra
     }
 
     /// Contact enlargement `ε_A, ε_B >= 0` (m): a node is inside when `d_A <= ε_A` and `d_B <= ε_B`.
@@ -145,6 +165,12 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
     /// The shape's closed-form crossing of the segment `x0`–`x1` ([`Sdf::segment_crossing`]).
     fn segment_crossing(&self, x0: Vector, x1: Vector) -> Option<Real> {
         self.shape.segment_crossing(self.rot_t * (x0 - self.origin), self.rot_t * (x1 - self.origin), self.eps)
+    }
+
+    /// The body's face planes `(n, h)` in B's frame (`n·x <= h` inside), moved out by `ε`.
+    fn planes(&self) -> Option<Vec<(Vector, Real)>> {
+        let planes = self.shape.face_planes()?;
+        Some(planes.into_iter().map(|(n, h)| (self.rot * n, h + (self.rot * n).dot(self.origin) + self.eps)).collect())
     }
 
     /// The shape's bounds in B's frame, enlarged by `ε`; infinite components stay infinite.
@@ -403,6 +429,12 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let (fa, fb) = (in_frame(*pose_a), in_frame(*pose_b));
     let (frame, pair, rough) = if volume(&fa) < volume(&fb) { fa? } else { fb? };
     let Some(rough) = rough else { return Ok(None) };
+    let to_world = |g: OverlapGeometry| OverlapGeometry { contact_point: frame.transform_point(g.contact_point), normal: frame.rotation * g.normal, ..g };
+    if settings.exact_polyhedra {
+        if let Some(decided) = polyhedra::overlap(&pair, &rough) {
+            return Ok(decided.map(to_world));
+        }
+    }
     let reused = previous_box.and_then(|p| {
         check_finite_vec("previous box", p.mins).ok()?;
         check_finite_vec("previous box", p.maxs).ok()?;
@@ -420,8 +452,7 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     // overlap of 1e-18 m and is 1 µm deep a sub-step later: then a fresh search from the rough
     // box decides (it also runs once when a contact ends).
     let found = followed.or_else(|| search(reused.as_ref().unwrap_or(&rough))).or_else(|| reused.and_then(|_| search(&rough)));
-    let Some(g) = found else { return Ok(None) };
-    Ok(Some(OverlapGeometry { contact_point: frame.transform_point(g.contact_point), normal: frame.rotation * g.normal, ..g }))
+    Ok(found.map(to_world))
 }
 
 /// Finds the overlap's box, starting the search from `seed` (the conservative rough box, or
@@ -617,7 +648,7 @@ fn finish<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     Some(OverlapGeometry { volume: integral.volume, contact_point: x_c, normal, indentation, surface_area: integral.surface_area, corrected_box })
 }
 
-deserialize_checked!(OverlapSettings via SettingsFields { n_c: usize, mode: IntegrationMode, enlargement: [Real; 2], closed_form_spheres: bool }
+deserialize_checked!(OverlapSettings via SettingsFields { n_c: usize, mode: IntegrationMode, enlargement: [Real; 2], closed_form_spheres: bool, exact_polyhedra: bool }
     => |f| OverlapSettings::new(f.n_c, f.mode)
         .and_then(|s| s.with_enlargement(f.enlargement[0], f.enlargement[1]))
-        .map(|s| s.with_closed_form_spheres(f.closed_form_spheres)));
+        .map(|s| s.with_closed_form_spheres(f.closed_form_spheres).with_exact_polyhedra(f.exact_polyhedra)));

@@ -98,8 +98,12 @@ pub struct HinderedSettling {
     /// How the lattice measures the fluid's force on the particles.
     pub force_method: ForceMethod,
     /// Sphere pairs' overlaps in closed form instead of on the `N_c` grid
-    /// ([`OverlapSettings::with_closed_form_spheres`]); cubes always use the grid.
+    /// ([`OverlapSettings::with_closed_form_spheres`]).
     pub closed_form_spheres: bool,
+    /// Cube pairs' overlaps exactly, as the clipped polyhedron, instead of on the `N_c` grid
+    /// ([`OverlapSettings::with_exact_polyhedra`]; the enlargement then moves the faces out
+    /// instead of rounding edges and corners).
+    pub exact_polyhedra: bool,
     /// Simulated time in units of `D / U`, `U` the Stokes velocity `(ρ_p/ρ_f − 1) g D² / (18 ν)`.
     pub duration: Real,
     /// Averaging starts at this fraction of the duration (after the transient).
@@ -135,6 +139,7 @@ impl HinderedSettling {
             contacts: true,
             force_method: ForceMethod::default(),
             closed_form_spheres: false,
+            exact_polyhedra: false,
             duration: 200.0,
             averaging_start: 0.5,
             seed: 2,
@@ -414,7 +419,7 @@ impl SettlingRun {
         fluid.balance_weight(&world)?;
         let contacts = if case.contacts {
             let half = 0.5 * case.enlargement_cells * dx;
-            let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?.with_closed_form_spheres(case.closed_form_spheres);
+            let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?.with_closed_form_spheres(case.closed_form_spheres).with_exact_polyhedra(case.exact_polyhedra);
             let mut c = DiscreteContacts::new(overlap, case.restitution)?
                 .with_friction(case.friction)
                 .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 })
