@@ -1,12 +1,16 @@
 //! Single-thread profile target: 96³ periodic box, plain fluid, `STEPS` steps (env), for perf;
 //! `PARTICLES=1` covers ~20 % of the nodes with spheres of radius 4, `FORCING=1` measures
-//! their forces by the forcing momentum instead of the momentum exchange.
+//! their forces by the forcing momentum instead of the momentum exchange, `STORAGE=f32` stores
+//! the populations as f32.
 fn main() {
     let steps: usize = std::env::var("STEPS").ok().and_then(|s| s.parse().ok()).unwrap_or(40);
     let particles = std::env::var("PARTICLES").is_ok();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     pool.install(|| {
         let mut lat = hlbm::Lattice::new(96, 96, 96, 0.6).unwrap();
+        if std::env::var("STORAGE").as_deref() == Ok("f32") {
+            lat.set_storage(hlbm::Storage::F32);
+        }
         if std::env::var("FORCING").is_ok() {
             lat.set_force_method(hlbm::ForceMethod::Forcing);
         }

@@ -2,13 +2,14 @@
 //! binary), the roofline of a D3Q19 f64 update (304 B per node, at the in-place bandwidth: the
 //! A-A sweep rewrites the lines it reads), and the kernel's MLUPs on 64³ and 128³ periodic
 //! boxes with 1 and 2 threads, plain fluid and with 20 % of the nodes covered by particles
-//! (their forces by momentum exchange and, printed only, by the forcing momentum).
+//! (their forces by momentum exchange and, printed only, by the forcing momentum) — with f64
+//! populations, then with f32 storage ([`hlbm::Storage::F32`], 152 B per update).
 //!
-//! Writes `target/validation/lbm_throughput.csv`.
+//! Writes `target/validation/lbm_throughput.csv` (f64) and `lbm_throughput_f32.csv`.
 
 use std::time::Instant;
 
-use hlbm::{ForceMethod, Lattice};
+use hlbm::{ForceMethod, Lattice, Storage};
 use rayon::prelude::*;
 
 /// Bytes a D3Q19 f64 node update moves in the A-A pattern: 19 reads + 19 writes.
@@ -98,9 +99,10 @@ fn add_particles(lat: &mut Lattice, fraction: f64) -> usize {
 }
 
 /// MLUPs of `n³` with `threads` threads, timed over at least 1.5 s.
-fn mlups(n: usize, threads: usize, particles: bool, method: ForceMethod) -> (f64, f64) {
+fn mlups(n: usize, threads: usize, particles: bool, method: ForceMethod, storage: Storage) -> (f64, f64) {
     pool(threads).install(|| {
         let mut lat = Lattice::new(n, n, n, 0.6).expect("lattice");
+        lat.set_storage(storage);
         lat.set_force_method(method);
         let covered = if particles { add_particles(&mut lat, 0.2) as f64 / lat.cells() as f64 } else { 0.0 };
         lat.run(4).expect("warm-up");
@@ -125,30 +127,36 @@ fn main() {
         triad = triad.max(bw.triad);
     }
     let roofline = roof * 1e9 / BYTES_PER_UPDATE / 1e6;
-    println!("Roofline: {roof:.1} GB/s (in-place update) / {BYTES_PER_UPDATE} B per node update = {roofline:.1} MLUPs");
+    println!("Roofline: {roof:.1} GB/s (in-place update) / {BYTES_PER_UPDATE} B per node update = {roofline:.1} MLUPs (f64)");
     println!("  (from the triad, which also pays a write-allocate the A-A sweep does not: {:.1} MLUPs)\n", triad * 1e9 / BYTES_PER_UPDATE / 1e6);
-    println!("{:>6} {:>8} {:>10} {:>9} {:>8} {:>10}", "grid", "threads", "particles", "covered", "MLUPs", "% roofline");
-    let mut rows = Vec::new();
-    for n in [64, 128] {
-        for t in 1..=threads_max {
-            // Plain fluid, then particles with their forces by momentum exchange (the default,
-            // in the CSV) and by the forcing momentum (printed only).
-            for (name, particles, method) in [("no", false, ForceMethod::MomentumExchange), ("exchange", true, ForceMethod::MomentumExchange), ("forcing", true, ForceMethod::Forcing)] {
-                let (m, covered) = mlups(n, t, particles, method);
-                println!("{:>5}³ {t:>8} {name:>10} {:>8.1}% {m:>8.1} {:>9.0}%", n, covered * 100.0, 100.0 * m / roofline);
-                if name != "forcing" {
-                    rows.push(format!("{n}^3,{t},{},{m:.2},{roofline:.2}", if particles { 0.2 } else { 0.0 }));
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("target").join("validation");
+    std::fs::create_dir_all(&dir).expect("output folder");
+    // f64 populations (the default, `lbm_throughput.csv`), then f32 storage at half the bytes
+    // per update (`lbm_throughput_f32.csv`, same columns).
+    for (storage, bytes, file) in [(Storage::F64, BYTES_PER_UPDATE, "lbm_throughput.csv"), (Storage::F32, BYTES_PER_UPDATE / 2.0, "lbm_throughput_f32.csv")] {
+        let roofline = roof * 1e9 / bytes / 1e6;
+        println!("{storage:?} populations: roofline {roofline:.1} MLUPs ({bytes} B per node update)");
+        println!("{:>6} {:>8} {:>10} {:>9} {:>8} {:>10}", "grid", "threads", "particles", "covered", "MLUPs", "% roofline");
+        let mut rows = Vec::new();
+        for n in [64, 128] {
+            for t in 1..=threads_max {
+                // Plain fluid, then particles with their forces by momentum exchange (the
+                // default, in the CSV) and by the forcing momentum (printed only).
+                for (name, particles, method) in [("no", false, ForceMethod::MomentumExchange), ("exchange", true, ForceMethod::MomentumExchange), ("forcing", true, ForceMethod::Forcing)] {
+                    let (m, covered) = mlups(n, t, particles, method, storage);
+                    println!("{:>5}³ {t:>8} {name:>10} {:>8.1}% {m:>8.1} {:>9.0}%", n, covered * 100.0, 100.0 * m / roofline);
+                    if name != "forcing" {
+                        rows.push(format!("{n}^3,{t},{},{m:.2},{roofline:.2}", if particles { 0.2 } else { 0.0 }));
+                    }
                 }
             }
         }
+        let path = dir.join(file);
+        hlbm::vtk::write_atomically(&path, |w| {
+            writeln!(w, "grid,threads,particles,mlups,roofline_mlups")?;
+            rows.iter().try_for_each(|r| writeln!(w, "{r}"))
+        })
+        .expect("csv");
+        println!("wrote {}\n", path.display());
     }
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("target").join("validation");
-    std::fs::create_dir_all(&dir).expect("output folder");
-    let path = dir.join("lbm_throughput.csv");
-    hlbm::vtk::write_atomically(&path, |w| {
-        writeln!(w, "grid,threads,particles,mlups,roofline_mlups")?;
-        rows.iter().try_for_each(|r| writeln!(w, "{r}"))
-    })
-    .expect("csv");
-    println!("\nwrote {}", path.display());
 }

@@ -1,13 +1,14 @@
 //! Validation of the lattice: analytical flows, conservation, determinism, health checks.
 
-use hlbm::{ForceMethod, Error, Lattice, UnitConverter};
+use hlbm::{ForceMethod, Error, Lattice, Storage, UnitConverter};
 
 /// Force-driven channel between halfway bounce-back walls at z = 0.5 and z = h + 0.5.
-fn poiseuille_l2(h: usize) -> f64 {
+fn poiseuille_l2(h: usize, storage: Storage) -> f64 {
     let tau = 0.8;
     let nu = (tau - 0.5) / 3.0;
     let g = 1e-6;
     let mut lat = Lattice::new(4, 1, h + 2, tau).unwrap();
+    lat.set_storage(storage);
     lat.close_faces([true, true, false]);
     lat.check_closed([true, true, false]).unwrap();
     lat.set_body_acceleration([g, 0.0, 0.0]);
@@ -28,14 +29,39 @@ fn poiseuille_l2(h: usize) -> f64 {
 
 #[test]
 fn poiseuille_converges_at_second_order() {
-    let e: Vec<f64> = [8, 16, 32].iter().map(|&h| poiseuille_l2(h)).collect();
+    let e: Vec<f64> = [8, 16, 32].iter().map(|&h| poiseuille_l2(h, Storage::F64)).collect();
     let order = (e[0] / e[2]).log2() / 2.0;
     assert!(e[2] < 2e-3, "L2 error at h = 32: {:e}", e[2]);
     assert!(order > 1.8, "order {order:.2} from errors {e:?}");
 }
 
+/// f32 storage (shifted populations) keeps the channel's discretisation error and order: its
+/// round-off adds 0.01 / 0.1 / 2 % to the L2 error at h = 8 / 16 / 32 (measured), where the
+/// peak velocity is only 1.3e-3 and the run 120 000 steps long.
+#[test]
+fn f32_storage_poiseuille_keeps_the_f64_error_and_order() {
+    let mut e = Vec::new();
+    for h in [8, 16, 32] {
+        let (e64, e32) = (poiseuille_l2(h, Storage::F64), poiseuille_l2(h, Storage::F32));
+        println!("h = {h}: L2 error f64 {e64:.4e}, f32 {e32:.4e}");
+        assert!((e32 / e64 - 1.0).abs() < 0.05, "h = {h}: f32 {e32:e} vs f64 {e64:e}");
+        e.push(e32);
+    }
+    let order = (e[0] / e[2]).log2() / 2.0;
+    assert!(order > 1.8, "order {order:.2} from errors {e:?}");
+}
+
 #[test]
 fn taylor_green_decays_at_the_viscous_rate() {
+    taylor_green_decay(Storage::F64);
+}
+
+#[test]
+fn f32_storage_taylor_green_decays_at_the_viscous_rate() {
+    taylor_green_decay(Storage::F32);
+}
+
+fn taylor_green_decay(storage: Storage) {
     let n = 32;
     let tau = 0.8;
     let nu = (tau - 0.5) / 3.0;
@@ -47,6 +73,7 @@ fn taylor_green_decays_at_the_viscous_rate() {
         let rho = 1.0 - 3.0 * u0 * u0 / 4.0 * ((2.0 * k * x).cos() + (2.0 * k * y).cos());
         (rho, [-u0 * (k * x).cos() * (k * y).sin(), u0 * (k * x).sin() * (k * y).cos(), 0.0])
     });
+    lat.set_storage(storage);
     let energy = |lat: &Lattice| {
         let mut e = 0.0;
         for y in 0..n {
@@ -63,6 +90,7 @@ fn taylor_green_decays_at_the_viscous_rate() {
     let e1 = energy(&lat);
     let rate = (e0 / e1).ln() / 1000.0 / 4.0;
     let exact = nu * k * k;
+    println!("{storage:?}: decay rate {rate:.6e} vs {exact:.6e} ({:+.3} %)", (rate / exact - 1.0) * 100.0);
     assert!((rate / exact - 1.0).abs() < 0.01, "decay rate {rate:e} vs {exact:e}");
 }
 
@@ -220,12 +248,15 @@ fn units_refuse_bad_input_and_round_trip() {
 /// Every path of the sweep (aligned vector blocks, the periodic first and last blocks of a row,
 /// a partial last block, blocks next to walls) against the textbook definition written out
 /// per node: BGK collision, then `f_i(x + c_i) = f*_i(x)`, or `f_i(x) = f*_ī(x)` where
-/// `x - c_i` is a wall (halfway bounce-back). Two steps: an even and an odd sweep.
+/// `x - c_i` is a wall (halfway bounce-back). Three steps: even, odd, even sweeps. With f64
+/// populations to round-off, with f32 storage to its rounding.
 #[test]
 fn the_sweep_streams_and_collides_like_the_textbook() {
     use hlbm::d3q19::{equilibrium, C, OPP, Q};
-    for (nx, ny, nz) in [(24, 5, 4), (13, 4, 6), (8, 3, 3)] {
+    for (nx, ny, nz, storage) in [(24, 5, 4, Storage::F64), (13, 4, 6, Storage::F64), (8, 3, 3, Storage::F64), (24, 5, 4, Storage::F32), (13, 4, 6, Storage::F32), (8, 3, 3, Storage::F32)] {
+        let tol = if storage == Storage::F64 { 1e-15 } else { 1e-8 };
         let mut lat = Lattice::new(nx, ny, nz, 0.7).unwrap();
+        lat.set_storage(storage);
         // A wall block inside the domain, so some rows take the solid-aware path.
         for (x, y, z) in [(3, 1, 1), (4, 1, 1), (3, 2, 1), (nx - 1, 0, 2)] {
             lat.set_solid(x, y, z, 1);
@@ -258,7 +289,7 @@ fn the_sweep_streams_and_collides_like_the_textbook() {
                         for i in 0..Q {
                             let src = at(x as i64 - C[i][0] as i64, y as i64 - C[i][1] as i64, z as i64 - C[i][2] as i64);
                             let want = if lat.is_solid(src) { post[c][OPP[i]] } else { post[src][i] };
-                            assert!((got[i] - want).abs() < 1e-15, "{nx}x{ny}x{nz} node ({x},{y},{z}) direction {i}: {} vs {want}", got[i]);
+                            assert!((got[i] - want).abs() < tol, "{storage:?} {nx}x{ny}x{nz} node ({x},{y},{z}) direction {i}: {} vs {want}", got[i]);
                         }
                     }
                 }
