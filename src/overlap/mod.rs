@@ -18,6 +18,11 @@
 //! Both find the overlap's box the same way (see `find_box`): axis rays that cannot step over
 //! a thin overlap, refinement while the hits fill a small part of the searched box, and a
 //! located seed when every ray misses.
+//!
+//! Two opt-in exact forms skip the grid for the pairs they cover — what the grid converges to
+//! as `N_c` grows: sphere lenses and caps ([`OverlapSettings::with_closed_form_spheres`]) and
+//! clipped polyhedra for cuboids, convex polyhedra and half-spaces
+//! ([`OverlapSettings::with_exact_polyhedra`]).
 
 mod closed_form;
 mod count;
