@@ -5,7 +5,10 @@
 //! settles, and writes `target/validation/drop_in.csv`.
 //!
 //! `cargo run --release --example drop_in [-- --bodies 180 --seconds 1.0 --nc 4 --per-contact 6]`
-//! (about four minutes on 2 cores; the run time grows with bodies × seconds).
+//! (about four minutes on 2 cores; the run time grows with bodies × seconds). `--exact` computes
+//! the sphere pairs (and spheres on the floor) in closed form and the pairs of cubes, convex
+//! polyhedra, walls and the plank as exact polyhedra; the rest (cylinders, sphere–box) on the
+//! grid.
 
 #[path = "common/mod.rs"]
 mod common;
@@ -34,6 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seconds = args.number("--seconds", 1.0);
     let per_contact = args.number("--per-contact", 6.0);
     let n_c = args.number("--nc", 4.0) as usize;
+    let exact = args.flag("--exact");
 
     // 1. The scene with rapier's own contacts.
     let BinScene { mut world, .. } = bin_scene(n);
@@ -58,11 +62,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // 2. The same scene with the discrete contact: these lines are the drop-in (the settings,
     //    rubber E = 5 MPa, e = 0.5, friction 0.5/0.4, are in `validation::drop_in`).
     let BinScene { mut world, .. } = bin_scene(n);
-    let mut contacts = drop_in::discrete_contacts(n_c, per_contact)?;
+    let overlap = discrete_contact::OverlapSettings::new(n_c, discrete_contact::IntegrationMode::Subcell)?;
+    let mut contacts = drop_in::discrete_contacts_with(overlap.with_closed_form_spheres(exact).with_exact_polyhedra(exact), per_contact)?;
     let handled = contacts.handle_all(&mut world, drop_in::rubber()?)?;
     // (then `contacts.step(&mut world)?` where the loop had `world.step()`)
 
-    println!("\ndiscrete contacts ({handled} colliders handled, sub-cell N_c = {n_c}, rubber E = 5 MPa, e = 0.5, μ = 0.5/0.4, {per_contact} sub-steps per contact time):");
+    let forms = if exact { ", exact forms where they exist" } else { "" };
+    println!("\ndiscrete contacts ({handled} colliders handled, sub-cell N_c = {n_c}{forms}, rubber E = 5 MPa, e = 0.5, μ = 0.5/0.4, {per_contact} sub-steps per contact time):");
     println!("{:>6} {:>12} {:>9} {:>9} {:>14} {:>8}", "t (s)", "KE (J)", "contacts", "sub/step", "max overlap", "wall (s)");
     let start = Instant::now();
     let (mut max_ind, mut max_sub, mut total_sub): (f64, usize, usize) = (0.0, 0, 0);

@@ -34,7 +34,13 @@ pub fn rubber() -> Result<Material> {
 /// `substeps_per_contact` sub-steps per Hertz contact time, automatic sub-stepping. Hand it
 /// the colliders with `handle_all(&mut world, rubber()?)`.
 pub fn discrete_contacts(n_c: usize, substeps_per_contact: Real) -> Result<DiscreteContacts> {
-    Ok(DiscreteContacts::new(OverlapSettings::new(n_c, IntegrationMode::Subcell)?, RESTITUTION)?
+    discrete_contacts_with(OverlapSettings::new(n_c, IntegrationMode::Subcell)?, substeps_per_contact)
+}
+
+/// [`discrete_contacts`] with any overlap settings (the example's `--exact` adds the exact forms
+/// for sphere and polyhedron pairs).
+pub fn discrete_contacts_with(overlap: OverlapSettings, substeps_per_contact: Real) -> Result<DiscreteContacts> {
+    Ok(DiscreteContacts::new(overlap, RESTITUTION)?
         .with_friction(Friction::new(0.5, 0.4, 0.01)?)
         .with_substeps_per_contact(substeps_per_contact)?
         .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 }))
