@@ -165,6 +165,28 @@ fn a_wet_run_in_a_closed_box_resumed_during_its_impact_is_bit_identical() {
     assert_eq!((resumed.impact, resumed.rebound_speed, resumed.rebound_height), (whole.impact, whole.rebound_speed, whole.rebound_height));
 }
 
+/// A lattice storing f32 populations (raw bits in the file) saved mid-run and resumed goes on
+/// bit-identically, its storage kept.
+#[test]
+fn an_f32_lattice_resumed_from_a_checkpoint_is_bit_identical() {
+    use discrete_contact::hlbm::{Lattice, Storage};
+    let dir = scratch("f32_lattice");
+    let mut lat = Lattice::new(12, 10, 8, 0.6).unwrap();
+    lat.set_storage(Storage::F32);
+    lat.set_body_acceleration([1e-5, 0.0, 0.0]);
+    lat.particles.add_sphere([5.2, 4.7, 3.9], 2.5, 1.0, [1e-3, 0.0, 0.0], 0).unwrap();
+    lat.run(5).unwrap();
+    let path = dir.join("lattice.ckpt");
+    checkpoint::save(&path, "test/lattice", &lat).unwrap();
+    let mut resumed: Lattice = checkpoint::load(&path, "test/lattice").unwrap();
+    assert_eq!(resumed.storage(), Storage::F32);
+    let (a, b) = (lat.run(6).unwrap(), resumed.run(6).unwrap());
+    assert_eq!(a.particle_forces[&0], b.particle_forces[&0]);
+    for (x, y, z) in [(0, 0, 0), (5, 4, 3), (11, 9, 7)] {
+        assert_eq!(lat.populations(x, y, z).map(f64::to_bits), resumed.populations(x, y, z).map(f64::to_bits));
+    }
+}
+
 fn problem(result: discrete_contact::Result<u64>) -> CheckpointProblem {
     match result {
         Err(Error::Checkpoint { problem, .. }) => problem,
