@@ -130,7 +130,9 @@ pub enum Storage {
     F32,
 }
 
-/// A stored population: f64 as is, f32 shifted by its weight.
+/// A stored population: f64 as is, f32 shifted by its weight. (Lane loops are written out
+/// with indices, as in the sweep: the form the measured code generation came from.)
+#[allow(clippy::needless_range_loop)]
 trait Pop: Copy + Send + Sync + 'static {
     /// Bytes per stored value.
     const SIZE: usize;
@@ -167,6 +169,7 @@ trait Pop: Copy + Send + Sync + 'static {
     }
 }
 
+#[allow(clippy::needless_range_loop)]
 impl Pop for f64 {
     const SIZE: usize = 8;
     #[inline(always)]
@@ -193,6 +196,7 @@ impl Pop for f64 {
     }
 }
 
+#[allow(clippy::needless_range_loop)]
 impl Pop for f32 {
     const SIZE: usize = 4;
     #[inline(always)]
