@@ -790,7 +790,8 @@ impl Lattice {
     /// Sweeps one row.
     ///
     /// # Safety
-    /// `ptr` points at `self.f`; no other thread works on this row's cells.
+    /// `ptr` points at `self.f`, stored as `T` (the lattice's [`Storage`]); no other thread works
+    /// on this row's cells.
     #[inline(always)]
     unsafe fn sweep_row_generic<T: Pop>(&self, ptr: Ptr<T>, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
         let (nx, ny, nz) = (self.nx, self.ny, self.nz);
