@@ -1,11 +1,12 @@
 //! The lattice kernel: one block collision (in cache), and full steps of periodic boxes with
 //! and without particle nodes (spheres of radius 4 covering ~20 % of the nodes, their forces
-//! measured by the forcing momentum and by the momentum exchange), on 1 and 2 threads.
-//! Criterion reports time per step; MLUPs = cells / time.
+//! measured by the forcing momentum and by the momentum exchange), on 1 and 2 threads; and the
+//! plain fluid with f32 population storage. Criterion reports time per step; MLUPs = cells /
+//! time.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use hlbm::d3q19::{collide, LANES, Q, W};
-use hlbm::{ForceMethod, Lattice};
+use hlbm::{ForceMethod, Lattice, Storage};
 
 fn block(c: &mut Criterion) {
     let mut blk = [[0.0f64; LANES]; Q];
@@ -43,9 +44,11 @@ fn steps(c: &mut Criterion) {
     for n in [64usize, 128] {
         g.throughput(Throughput::Elements((n * n * n) as u64));
         for threads in [1usize, 2] {
-            for (name, method) in [("fluid", None), ("forcing", Some(ForceMethod::Forcing)), ("exchange", Some(ForceMethod::MomentumExchange))] {
+            let cases = [("fluid", None, Storage::F64), ("forcing", Some(ForceMethod::Forcing), Storage::F64), ("exchange", Some(ForceMethod::MomentumExchange), Storage::F64), ("fluid_f32", None, Storage::F32)];
+            for (name, method, storage) in cases {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 let mut lat = Lattice::new(n, n, n, 0.6).unwrap();
+                lat.set_storage(storage);
                 if let Some(method) = method {
                     lat.set_force_method(method);
                     covered(&mut lat);
