@@ -353,6 +353,19 @@ impl Grid {
     }
 }
 
+/// The overlap's B→A normal (un-normalised) from the area vectors of its A facets (out of A)
+/// and B facets (out of B) and their areas: `n_B − n_A`, each part weighted with the *other*
+/// part's area, so the smaller, better-resolved part counts most (see [`subcell`]); equal parts
+/// give the plain mean, and swapping the bodies negates it. Zero without facets.
+fn blended_normal(area_vectors: [Vector; 2], areas: [Real; 2]) -> Vector {
+    let total = areas[0] + areas[1];
+    if total > 0.0 {
+        (area_vectors[1] * areas[0] - area_vectors[0] * areas[1]) * (2.0 / total)
+    } else {
+        Vector::ZERO
+    }
+}
+
 /// Result of integrating the overlap on the corrected box, before the indentation.
 pub(crate) struct Integral {
     volume: Real,

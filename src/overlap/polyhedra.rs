@@ -20,7 +20,7 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
-use super::{OverlapGeometry, Pair};
+use super::{blended_normal, OverlapGeometry, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
 
@@ -109,11 +109,8 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         return Some(None);
     }
     let centroid = moment / volume;
-    // As the sub-cell integration: B's outward area vector against A's, each weighted with the
-    // other part's area (the smaller part counts most); B→A.
-    let total = area[0] + area[1];
-    let normal =
-        ((area_vec[1] * area[0] - area_vec[0] * area[1]) * (2.0 / total)).normalize_or_zero();
+    // Blended as the sub-cell integration blends its facets.
+    let normal = blended_normal(area_vec, area).normalize_or_zero();
     if normal == Vector::ZERO || !normal.is_finite() {
         return None;
     }
@@ -131,7 +128,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         contact_point: centroid,
         normal,
         indentation,
-        surface_area: total,
+        surface_area: area[0] + area[1],
         corrected_box: Aabb::new(lo, hi),
     }))
 }

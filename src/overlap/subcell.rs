@@ -21,7 +21,7 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
-use super::{crossing, Grid, Integral, Pair};
+use super::{blended_normal, crossing, Grid, Integral, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
 
@@ -331,15 +331,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
         volume: it.volume,
         centroid: if it.volume > 0.0 { it.moment / it.volume } else { Vector::ZERO },
         // B's outward normal points from B to A, A's from A to B: both B→A as `n_B − n_A`.
-        normal: {
-            let [area_a, area_b] = it.area;
-            let total = area_a + area_b;
-            if total > 0.0 {
-                (it.normal[1] * area_a - it.normal[0] * area_b) * (2.0 / total)
-            } else {
-                Vector::ZERO
-            }
-        },
+        normal: blended_normal(it.normal, it.area),
         surface_area: it.area[0] + it.area[1],
         bounds: (it.volume > 0.0).then(|| Aabb::new(it.lo, it.hi)),
     }
