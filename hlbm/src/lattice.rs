@@ -130,12 +130,19 @@ pub enum Storage {
     F32,
 }
 
+impl Storage {
+    /// Bytes per stored population.
+    fn bytes(self) -> usize {
+        match self {
+            Self::F64 => 8,
+            Self::F32 => 4,
+        }
+    }
+}
+
 /// A stored population: f64 as is, f32 shifted by its weight. (Lane loops are written out
 /// with indices, as in the sweep: the form the measured code generation came from.)
-#[allow(clippy::needless_range_loop)]
 trait Pop: Copy + Send + Sync + 'static {
-    /// Bytes per stored value.
-    const SIZE: usize;
     /// Converts a population of direction `i` for storage.
     fn put(v: f64, i: usize) -> Self;
     /// The population of direction `i` a stored value holds.
@@ -144,34 +151,16 @@ trait Pop: Copy + Send + Sync + 'static {
     ///
     /// # Safety
     /// `p` points at `LANES` stored values.
-    #[inline(always)]
-    unsafe fn load_block(p: *const Self, i: usize) -> [f64; LANES] {
-        // Through a local block, so the conversion vectorises across the cells (written as one
-        // loop over cells and populations, LLVM gathered across populations instead).
-        let v = (p as *const [Self; LANES]).read_unaligned();
-        let mut out = [0.0; LANES];
-        for l in 0..LANES {
-            out[l] = v[l].get(i);
-        }
-        out
-    }
+    unsafe fn load_block(p: *const Self, i: usize) -> [f64; LANES];
     /// Stores `LANES` populations of direction `i` at `p`.
     ///
     /// # Safety
     /// `p` points at `LANES` stored values no one else accesses.
-    #[inline(always)]
-    unsafe fn store_block(p: *mut Self, v: &[f64; LANES], i: usize) {
-        let mut out = [Self::put(0.0, i); LANES];
-        for l in 0..LANES {
-            out[l] = Self::put(v[l], i);
-        }
-        (p as *mut [Self; LANES]).write_unaligned(out);
-    }
+    unsafe fn store_block(p: *mut Self, v: &[f64; LANES], i: usize);
 }
 
 #[allow(clippy::needless_range_loop)]
 impl Pop for f64 {
-    const SIZE: usize = 8;
     #[inline(always)]
     fn put(v: f64, _: usize) -> Self {
         v
@@ -198,10 +187,10 @@ impl Pop for f64 {
 
 #[allow(clippy::needless_range_loop)]
 impl Pop for f32 {
-    const SIZE: usize = 4;
     #[inline(always)]
     unsafe fn load_block(p: *const Self, i: usize) -> [f64; LANES] {
-        // The opaque `i` keeps LLVM from vectorising the caller's loop over populations with
+        // Through a local block, so the conversion vectorises across the cells; the opaque `i`
+        // keeps LLVM from vectorising the caller's loop over populations with
         // gathers (it did, at half the speed): the conversion vectorises across the cells.
         let w = W[std::hint::black_box(i)];
         let v = (p as *const [f32; LANES]).read_unaligned();
@@ -250,18 +239,18 @@ struct Lines(Vec<Line>);
 impl Lines {
     /// Lines for `values` stored values of `T`.
     fn new<T: Pop>(values: usize) -> Self {
-        Lines(vec![Line([0; 8]); (values * T::SIZE).div_ceil(64)])
+        Lines(vec![Line([0; 8]); (values * std::mem::size_of::<T>()).div_ceil(64)])
     }
 
     fn as_slice<T: Pop>(&self) -> &[T] {
         // SAFETY: `Line` is `repr(C)` over 64 bytes with no padding, aligned to 64; f64 and f32
         // have no invalid bit patterns.
-        unsafe { std::slice::from_raw_parts(self.0.as_ptr().cast(), self.0.len() * 64 / T::SIZE) }
+        unsafe { std::slice::from_raw_parts(self.0.as_ptr().cast(), self.0.len() * 64 / std::mem::size_of::<T>()) }
     }
 
     fn as_mut_slice<T: Pop>(&mut self) -> &mut [T] {
         // SAFETY: as in `as_slice`.
-        unsafe { std::slice::from_raw_parts_mut(self.0.as_mut_ptr().cast(), self.0.len() * 64 / T::SIZE) }
+        unsafe { std::slice::from_raw_parts_mut(self.0.as_mut_ptr().cast(), self.0.len() * 64 / std::mem::size_of::<T>()) }
     }
 }
 
@@ -330,7 +319,7 @@ impl Lattice {
             }
         }
         let n = nx * ny * nz;
-        let stride = population_stride(n, 8);
+        let stride = population_stride(n, Storage::F64.bytes());
         let mut f = Lines::new::<f64>(Q * stride);
         for i in 0..Q {
             f.as_mut_slice::<f64>()[i * stride..i * stride + n].fill(W[i]);
@@ -558,7 +547,7 @@ impl Lattice {
         }
         let (n, cells) = (self.stride, self.cells());
         let old: Vec<f64> = (0..Q * n).map(|at| self.get(at, at / n)).collect();
-        self.stride = population_stride(cells, if storage == Storage::F32 { 4 } else { 8 });
+        self.stride = population_stride(cells, storage.bytes());
         self.storage = storage;
         self.f = match storage {
             Storage::F64 => Lines::new::<f64>(Q * self.stride),
