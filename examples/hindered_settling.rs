@@ -69,11 +69,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .value("--shapes")
         .unwrap_or("sphere,cube")
         .split(',')
-        .map(|s| match s.trim() {
-            "sphere" => ParticleShape::Sphere,
-            "cube" => ParticleShape::Cube,
-            other => panic!("--shapes: sphere or cube, not {other}"),
-        })
+        .map(|s| shape_named("--shapes", s))
         .collect();
     let case_for = |shape, phi, ar, contacts| -> Result<HinderedSettling, discrete_contact::Error> {
         let mut c = seed_case(&args, shape, phi, ar)?;
@@ -261,6 +257,15 @@ fn run_with_progress(case: &HinderedSettling, checkpoints: &common::Checkpoints)
     Ok(run.finish())
 }
 
+/// The particle shape an option names; any other name stops the example with the option's name.
+fn shape_named(option: &str, name: &str) -> ParticleShape {
+    match name.trim() {
+        "sphere" => ParticleShape::Sphere,
+        "cube" => ParticleShape::Cube,
+        other => panic!("{option}: sphere or cube, not {other}"),
+    }
+}
+
 /// Seed 002's case with the options every run takes (`--nc`).
 fn seed_case(args: &common::Args, shape: ParticleShape, phi: f64, ar: f64) -> Result<HinderedSettling, discrete_contact::Error> {
     let mut c = HinderedSettling::seed_002(shape, phi, ar)?;
@@ -330,7 +335,7 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
 /// box sizes (quick resolution), from rest: the contacts form during the run.
 fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
     let steps = args.number("--perf-steps", 600.0) as u64;
-    let shape = if args.value("--perf-shape") == Some("cube") { ParticleShape::Cube } else { ParticleShape::Sphere };
+    let shape = shape_named("--perf-shape", args.value("--perf-shape").unwrap_or("sphere"));
     let mut rows = Vec::new();
     println!("{:>5} {:>6} {:>5} {:>9} {:>8} {:>10} {:>9} {:>9} {:>10}", "box_D", "nodes", "phi", "contacts", "N", "s/1000", "MLUPs", "contacts%", "max_contacts");
     for box_d in args.list("--perf-box-d", &[8.0, 15.0]) {
