@@ -576,8 +576,24 @@ fn shape_type_name(s: &TypedShape<'_>) -> &'static str {
     }
 }
 
+impl ConvexShape {
+    /// [`Sdf::distance`] of the shapes it does not inline.
+    #[inline(never)]
+    fn distance_out_of_line(&self, p: Vector) -> Real {
+        match self {
+            Self::Rounded { inner, border_radius } => inner.distance(p) - border_radius,
+            Self::Custom(c) => c.distance(p),
+            _ => self.distance_and_gradient(p).0,
+        }
+    }
+}
+
 impl Sdf for ConvexShape {
-    #[inline]
+    /// The closed-form primitives (ball, cuboid, cylinder, half-space) inline into the caller —
+    /// the lattice mapping calls this for every node a body may cover, and through a call into
+    /// the whole match a ball's distance cost ~a fifth of the mapping; the composite and
+    /// general shapes (rounded, custom, cone, capsule, polyhedron) out of line.
+    #[inline(always)]
     fn distance(&self, p: Vector) -> Real {
         match self {
             Self::Ball { radius } => p.length() - radius,
@@ -592,9 +608,7 @@ impl Sdf for ConvexShape {
                 (ox * ox + oy * oy).sqrt() + qx.max(qy).min(0.0)
             }
             Self::HalfSpace { normal } => normal.dot(p),
-            Self::Rounded { inner, border_radius } => inner.distance(p) - border_radius,
-            Self::Custom(c) => c.distance(p),
-            _ => self.distance_and_gradient(p).0,
+            _ => self.distance_out_of_line(p),
         }
     }
 
