@@ -367,9 +367,10 @@ impl Fluid {
     /// Balances the suspension's weight: in a box periodic along gravity nothing holds the
     /// bodies' net weight `W = Σ (m − ρ_f V) g`, and the whole suspension would accelerate. This
     /// sets the fluid's body acceleration to `a = −W / (ρ_f V_box)` — a uniform pressure
-    /// gradient, whose share on the nodes inside bodies reaches the bodies through the
-    /// coupling — so the total momentum of fluid and bodies stays constant. Call it after
-    /// coupling the bodies; returns `a` (m/s²).
+    /// gradient, whose part on the nodes a body covers reaches the body through the coupling
+    /// (with either force measure) — so the total momentum of fluid and bodies stays constant
+    /// (tested: a sphere in a periodic box settles at a constant speed, as the Stokes cubic
+    /// array). Call it after coupling the bodies; returns `a` (m/s²).
     pub fn balance_weight(&mut self, world: &PhysicsWorld) -> Result<Vector> {
         let rho = self.units.density();
         let mut weight = Vector::ZERO;

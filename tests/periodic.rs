@@ -7,7 +7,7 @@ use discrete_contact::periodic::PeriodicBox;
 use discrete_contact::prelude::*;
 use discrete_contact::rapier::DiscreteContacts;
 use discrete_contact::rapier3d_f64::prelude::*;
-use discrete_contact::validation::hindered_settling::{run, HinderedSettling, ParticleShape};
+use discrete_contact::validation::hindered_settling::{run, HinderedSettling, ParticleShape, SettlingRun};
 
 const L: Real = 0.1;
 const R: Real = 0.01;
@@ -136,6 +136,75 @@ fn a_periodic_wet_run_gives_the_same_result_on_one_and_two_threads() {
     assert!(one.samples.len() >= 5);
     assert_eq!(one.samples, two.samples, "⟨v⟩/v_s over time");
     assert!(one.samples.iter().all(|s| s.1.is_finite()));
+}
+
+/// A sphere alone in a triply periodic box is a simple cubic array: in Stokes flow it settles
+/// at `U_stokes / K(φ)` (Hasimoto; Sangani & Acrivos), a 35 % hindrance at φ = 6.5 % and 22 %
+/// at 0.8 %. The lattice sphere's hydrodynamic radius differs from its geometric one by a
+/// fraction of `Δx`, so each run is turned into the effective radius that `K` implies; the two
+/// box sizes must give the same one (measured: 0.877 and 0.885 of the geometric radius, 0.9 %
+/// apart). Without the body force's share on the sphere (the mean pressure gradient's push on
+/// its volume) the dense case settles 6 % faster and the two radii are 3.4 % apart.
+#[test]
+fn a_sphere_alone_in_a_periodic_box_settles_as_the_stokes_cubic_array() {
+    use hlbm::correlations::cubic_array_drag_factor;
+    let effective_radius = |box_nodes: usize| {
+        let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, 0.01, 0.5).unwrap();
+        case.nodes_per_diameter = 6.0;
+        case.box_nodes = box_nodes;
+        case.tau = 1.0;
+        case.contacts = false;
+        case.volume_fraction = std::f64::consts::PI / 6.0 * (6.0 / box_nodes as Real).powi(3);
+        // Five viscous times L²/ν of the box, averaged over the last 40 %.
+        let steps = 5.0 * (box_nodes * box_nodes) as Real / ((case.tau - 0.5) / 3.0);
+        case.duration = steps * case.dt() * case.stokes_velocity() / case.diameter;
+        case.averaging_start = 0.6;
+        assert!(case.reynolds() < 0.05, "Stokes flow");
+        // The run, with the sphere's and the fluid's velocities at 60 % and at the end: under the
+        // balance force the total momentum is constant, so neither may drift once steady (the
+        // sphere's speed wobbles by ~0.5 % as it crosses the lattice; when the smoothing band's
+        // body force was lost, both drifted by ~10 % of it over this stretch).
+        let mut settling = SettlingRun::new(&case).unwrap();
+        let velocities = |s: &SettlingRun| {
+            let vp = s.world().bodies.iter().map(|(_, b)| b.linvel().z).sum::<Real>();
+            (vp, s.fluid().mean_velocity().z)
+        };
+        let mut at_60 = None;
+        while !settling.is_done() {
+            settling.step().unwrap();
+            if at_60.is_none() && settling.steps_done() as Real >= 0.6 * case.steps() as Real {
+                at_60 = Some(velocities(&settling));
+            }
+        }
+        let ((vp_60, uf_60), (vp_end, uf_end)) = (at_60.unwrap(), velocities(&settling));
+        for (what, early, late) in [("sphere", vp_60, vp_end), ("fluid mean", uf_60, uf_end)] {
+            assert!((late - early).abs() < 0.02 * vp_end.abs(), "{what} velocity drifts: {early} -> {late} m/s (sphere {vp_end})");
+        }
+        let r = settling.finish();
+        assert_eq!(r.particles, 1);
+        let v_over_u = r.v_mean_over_vs * case.terminal_velocity() / case.stokes_velocity();
+        // Solve v/U = (a/a_eff) / K(φ (a_eff/a)³) for a_eff/a by bisection (v/U falls with a_eff).
+        let (mut lo, mut hi) = (0.5, 1.5);
+        for _ in 0..60 {
+            let m = 0.5 * (lo + hi);
+            if 1.0 / (m * cubic_array_drag_factor(case.volume_fraction * m.powi(3))) > v_over_u {
+                lo = m;
+            } else {
+                hi = m;
+            }
+        }
+        (case.volume_fraction, v_over_u, lo)
+    };
+    let (phi_dense, v_dense, a_dense) = effective_radius(12);
+    let (phi_dilute, v_dilute, a_dilute) = effective_radius(24);
+    // The hindrance itself is large: without the array's K both would be near 1 / a_eff.
+    assert!(v_dense < 0.6 && v_dilute < 0.85, "v/U = {v_dense} at φ = {phi_dense}, {v_dilute} at φ = {phi_dilute}");
+    // A lattice sphere of 6 nodes is hydrodynamically a few tenths of Δx smaller (τ = 1).
+    assert!((0.8..1.0).contains(&a_dense), "effective radius {a_dense} of the geometric one");
+    assert!(
+        (a_dense / a_dilute - 1.0).abs() < 0.02,
+        "effective radius {a_dense} at φ = {phi_dense:.4} (v/U {v_dense:.4}) vs {a_dilute} at φ = {phi_dilute:.4} (v/U {v_dilute:.4})"
+    );
 }
 
 #[test]

@@ -164,10 +164,13 @@ fn same_results_on_1_and_2_threads(method: ForceMethod) {
 }
 
 /// Steady flow driven by a body force `g` past a sphere held at rest, in a periodic box. At
-/// steady state the fluid's momentum balance fixes both force measures: the forcing momentum
-/// equals the body force on every node, `F_forcing = Σ_all ρ g`; the momentum exchange sees
-/// only what crosses the particle's outer surface, so it lacks the body force on the fluid share
-/// `(1 − d_B)` of the particle's nodes: `F_exchange = F_forcing − Σ_particle (1 − d_B) ρ g`.
+/// steady state the fluid's momentum balance fixes both force measures: the sphere takes all
+/// the momentum the body force puts in, `F = Σ_all ρ g`. The forcing measure sees it where the
+/// forcing takes it out; the momentum exchange sees what crosses the particle's outer surface
+/// plus the body force on every node the particle covers. (Before, the exchange handed over the
+/// body force only on the solid share `d_B` of those nodes and lacked the smoothing band's fluid
+/// share `Σ (1 − d_B) ρ g` — 2.9 % of the drive here; in a periodic suspension under a balance
+/// force that momentum was lost and the whole suspension accelerated.)
 #[test]
 fn momentum_exchange_balances_the_driving_force_in_steady_flow() {
     let n = 16;
@@ -176,23 +179,15 @@ fn momentum_exchange_balances_the_driving_force_in_steady_flow() {
     lat.set_force_method(ForceMethod::Forcing);
     lat.set_body_acceleration([g, 0.0, 0.0]);
     moving_sphere(&mut lat, [0.0; 3]);
-    let mut fluid_share = 0.0;
-    for z in 0..n {
-        for y in 0..n {
-            fluid_share += lat.particles.row(z * n + y).iter().map(|p| 1.0 - p.d_b).sum::<f64>();
-        }
-    }
     lat.run(4000).unwrap();
     let (mass, _) = lat.totals();
-    let rho = mass / (n * n * n) as f64;
     let forcing = lat.step().unwrap().particle_forces[&7].force;
     lat.set_force_method(ForceMethod::MomentumExchange);
     let exchange = lat.step().unwrap().particle_forces[&7].force;
     let drive = mass * g;
-    let expected = forcing[0] - fluid_share * rho * g;
-    println!("drive {drive:e}, forcing {:e}, exchange {:e} (expected {expected:e}, {:.1e} off), fluid share {fluid_share:.2} nodes", forcing[0], exchange[0], exchange[0] / expected - 1.0);
+    println!("drive {drive:e}, forcing {:e}, exchange {:e} ({:.1e} off)", forcing[0], exchange[0], exchange[0] / drive - 1.0);
     assert!((forcing[0] / drive - 1.0).abs() < 1e-4, "forcing {:e} vs drive {drive:e}", forcing[0]);
-    assert!((exchange[0] / expected - 1.0).abs() < 1e-5, "exchange {:e} vs {expected:e}", exchange[0]);
+    assert!((exchange[0] / drive - 1.0).abs() < 1e-4, "exchange {:e} vs drive {drive:e}", exchange[0]);
     // The sphere is symmetric about the flow: no side force, no moment about the flow axis.
     for f in [forcing, exchange] {
         assert!(f[1].abs() < 1e-3 * f[0] && f[2].abs() < 1e-3 * f[0], "side force {f:?}");
