@@ -386,6 +386,48 @@ fn exact_polyhedron_overlap_of_a_cube_corner_in_a_plane() {
     }
 }
 
+/// A user SDF's face planes need not have unit normals: the exact overlap scales each plane
+/// (the same half-space). A zero normal cannot be scaled: the pair goes to the grid.
+#[test]
+fn exact_polyhedra_take_a_user_sdfs_planes_at_any_scale_and_refuse_zero_ones_to_the_grid() {
+    use discrete_contact::compute_overlap;
+    use discrete_contact::parry3d_f64::bounding_volume::Aabb;
+    struct Planes {
+        cube: ConvexShape,
+        scale: [f64; 6],
+    }
+    impl Sdf for Planes {
+        fn distance(&self, p: Vector) -> f64 {
+            self.cube.distance(p)
+        }
+        fn local_bounds(&self) -> Aabb {
+            self.cube.local_bounds()
+        }
+        fn face_planes(&self) -> Option<Vec<(Vector, f64)>> {
+            let planes = self.cube.face_planes()?;
+            Some(planes.into_iter().zip(self.scale).map(|((n, h), k)| (n * k, h * k)).collect())
+        }
+    }
+    let cube = ConvexShape::cuboid(Vector::new(0.5, 0.4, 0.3)).unwrap();
+    let pose_a = Pose::from_parts(Vector::new(0.1, 0.2, -0.1), Rotation::from_scaled_axis(Vector::new(0.3, -0.2, 0.5)));
+    let pose_b = Pose::from_parts(Vector::new(0.8, 0.5, 0.2), Rotation::from_scaled_axis(Vector::new(-0.4, 0.6, 0.1)));
+    let exact = settings(8, IntegrationMode::Subcell).with_enlargement(0.01, 0.02).unwrap().with_exact_polyhedra(true);
+    let reference = compute_overlap(&cube, &pose_a, &cube, &pose_b, &exact, None).unwrap().expect("the boxes overlap");
+    let scaled = Planes { cube: cube.clone(), scale: [3.0, 0.2, 1.0, 7.5, 0.01, 2.0] };
+    let g = compute_overlap(&scaled, &pose_a, &cube, &pose_b, &exact, None).unwrap().expect("the boxes overlap");
+    assert_relative_eq!(g.volume, reference.volume, max_relative = 1e-12);
+    assert!((g.contact_point - reference.contact_point).length() < 1e-12);
+    assert!((g.normal - reference.normal).length() < 1e-12);
+    assert_relative_eq!(g.indentation, reference.indentation, max_relative = 1e-12);
+    // A zero plane: the grid's answer, not a wrong exact one.
+    let zero = Planes { cube: cube.clone(), scale: [1.0, 1.0, 0.0, 1.0, 1.0, 1.0] };
+    let grid = settings(8, IntegrationMode::Subcell).with_enlargement(0.01, 0.02).unwrap();
+    let on_grid = compute_overlap(&cube, &pose_a, &cube, &pose_b, &grid, None).unwrap().unwrap();
+    let g = compute_overlap(&zero, &pose_a, &cube, &pose_b, &exact, None).unwrap().unwrap();
+    assert_eq!(g.volume, on_grid.volume);
+    assert!((g.volume / reference.volume - 1.0).abs() > 1e-9, "the grid differs from the exact volume");
+}
+
 #[test]
 fn exact_polyhedron_overlaps_match_the_fine_grid() {
     use discrete_contact::compute_overlap;

@@ -173,9 +173,21 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
     }
 
     /// The body's face planes `(n, h)` in B's frame (`n·x <= h` inside), moved out by `ε`.
+    /// A plane given with a non-unit normal is scaled to a unit one (the same half-space; the
+    /// enlargement and the chord need the unit form); a zero or non-finite one gives `None`,
+    /// and the pair goes to the grid.
     fn planes(&self) -> Option<Vec<(Vector, Real)>> {
         let planes = self.shape.face_planes()?;
-        Some(planes.into_iter().map(|(n, h)| (self.rot * n, h + (self.rot * n).dot(self.origin) + self.eps)).collect())
+        planes
+            .into_iter()
+            .map(|(n, h)| {
+                let len = n.length();
+                (len > 0.0 && len.is_finite() && h.is_finite()).then(|| {
+                    let n = self.rot * (n / len);
+                    (n, h / len + n.dot(self.origin) + self.eps)
+                })
+            })
+            .collect()
     }
 
     /// The shape's bounds in B's frame, enlarged by `ε`; infinite components stay infinite.
