@@ -132,7 +132,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         let result = run_with_progress(&case, &checkpoints)?;
         println!(
-            "  ⟨v⟩/v_s = {:.3} (Richardson–Zaki {:.3}, Garside–Al-Dibouni {:.3}); {:.1} s, {:.1} MLUPs; time in lattice {:.0} %, mapping {:.0} %, bodies + contacts {:.0} %; at most {} contacts",
+            "  ⟨v⟩/v_s = {:.3} (Richardson–Zaki {:.3}, Garside–Al-Dibouni {:.3}); {:.1} s, {:.1} MLUPs; time in lattice {:.0} %, mapping {:.0} %, bodies + contacts {:.0} %; at most {} contacts; momentum balance {:+.1} % of the net weight",
             result.v_mean_over_vs,
             case.richardson_zaki(),
             case.garside_al_dibouni(),
@@ -141,8 +141,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             100.0 * result.seconds.lattice / result.wall_time,
             100.0 * result.seconds.mapping / result.wall_time,
             100.0 * result.seconds.bodies / result.wall_time,
-            result.max_contacts
+            result.max_contacts,
+            100.0 * result.momentum_imbalance
         );
+        if result.momentum_imbalance.abs() > 0.05 {
+            println!(
+                "  WARNING: a net force of {:.0} % of the bodies' net weight on the suspension — the coupling loses or makes momentum",
+                100.0 * result.momentum_imbalance
+            );
+        }
         runs.push(Run { case, result });
     }
 

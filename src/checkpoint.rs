@@ -44,8 +44,8 @@ use crate::error::{CheckpointProblem, Error, Result};
 use crate::io::{io_error, write_atomically};
 
 /// The checkpoint format this build writes and reads (2: `OverlapSettings` carries
-/// `exact_polyhedra`).
-pub const FORMAT_VERSION: u32 = 2;
+/// `exact_polyhedra`; 3: a settling run's result carries its momentum series).
+pub const FORMAT_VERSION: u32 = 3;
 
 /// Signature at the start of every checkpoint (a non-text byte first, as PNG does, so a text
 /// file is never mistaken for one).

@@ -254,6 +254,14 @@ pub struct SettlingResult {
     pub seconds: crate::coupling::StepSeconds,
     /// Most contacts alive at once.
     pub max_contacts: usize,
+    /// Total momentum along gravity at every sample — bodies plus the fluid outside them, all
+    /// at rest at the start — over `N m_p v_s`. The balance force keeps it constant; a slope
+    /// means the coupling loses or makes momentum ([`momentum_imbalance`](Self::momentum_imbalance)).
+    pub momentum: Vec<Real>,
+    /// The mean net force along gravity over the averaging window (the slope of
+    /// [`momentum`](Self::momentum)), over the bodies' net weight `N (m_p − ρ_f V) g`: zero
+    /// when momentum is conserved.
+    pub momentum_imbalance: Real,
 }
 
 impl SettlingResult {
@@ -505,8 +513,15 @@ impl SettlingRun {
             let vp = self.particles.iter().map(|&(b, _)| self.world.bodies[b].linvel().z).sum::<Real>() / n;
             let v_box = case.box_length().powi(3);
             let v_solid = n * self.volume;
-            let u_f = (self.fluid.mean_velocity().z * v_box - vp * v_solid) / (v_box - v_solid);
+            let u_mean = self.fluid.mean_velocity().z;
+            let u_f = (u_mean * v_box - vp * v_solid) / (v_box - v_solid);
             self.latest = -(1.0 - case.volume_fraction) * (vp - u_f) / case.terminal_velocity();
+            let bodies = self.particles.iter().map(|&(b, _)| self.world.bodies[b].mass() * self.world.bodies[b].linvel().z).sum::<Real>();
+            // The fluid outside the bodies (the lattice's less what the bodies carry inside them,
+            // which moves with them and is not physical).
+            let momentum = bodies + case.fluid_density * (v_box - v_solid) * u_f;
+            let scale = n * self.volume * case.density_ratio * case.fluid_density * case.terminal_velocity();
+            out.momentum.push(momentum / scale);
             out.samples.push((self.step as Real * case.dt(), self.latest));
         }
         out.wall_time += start.elapsed().as_secs_f64();
@@ -523,6 +538,17 @@ impl SettlingRun {
         let from = self.case.averaging_start * self.result.steps as Real * self.case.dt();
         let tail: Vec<Real> = self.result.samples.iter().filter(|s| s.0 >= from).map(|s| s.1).collect();
         self.result.v_mean_over_vs = tail.iter().sum::<Real>() / tail.len().max(1) as Real;
+        // The momentum's slope over the same window, as a force over the net weight:
+        // ΔP / (N m_p v_s) over (1 − ρ_f/ρ_p) g Δt / v_s.
+        let r = &mut self.result;
+        let first = r.samples.iter().position(|s| s.0 >= from);
+        if let (Some(i), Some(&(t1, _)), Some(&p1)) = (first, r.samples.last(), r.momentum.last()) {
+            let dt = t1 - r.samples[i].0;
+            let case = &self.case;
+            if dt > 0.0 {
+                r.momentum_imbalance = (p1 - r.momentum[i]) / ((1.0 - 1.0 / case.density_ratio) * G * dt / case.terminal_velocity());
+            }
+        }
         self.result
     }
 
