@@ -254,13 +254,14 @@ pub struct SettlingResult {
     pub seconds: crate::coupling::StepSeconds,
     /// Most contacts alive at once.
     pub max_contacts: usize,
-    /// Total momentum along gravity at every sample — bodies plus the fluid outside them, all
-    /// at rest at the start — over `N m_p v_s`. The balance force keeps it constant; a slope
-    /// means the coupling loses or makes momentum ([`momentum_imbalance`](Self::momentum_imbalance)).
+    /// Total momentum along `z` (up; gravity is −z) at every sample — bodies plus the fluid
+    /// outside them, all at rest at the start — over `N m_p v_s`. The balance force keeps it
+    /// constant; a slope means the coupling loses or makes momentum
+    /// ([`momentum_imbalance`](Self::momentum_imbalance)).
     pub momentum: Vec<Real>,
-    /// The mean net force along gravity over the averaging window (the slope of
+    /// The mean net force on the suspension along `z` over the averaging window (the slope of
     /// [`momentum`](Self::momentum)), over the bodies' net weight `N (m_p − ρ_f V) g`: zero
-    /// when momentum is conserved.
+    /// when momentum is conserved, negative when the suspension is pushed down.
     pub momentum_imbalance: Real,
 }
 
