@@ -194,8 +194,8 @@ impl Pop for f32 {
     #[inline(always)]
     unsafe fn load_block(p: *const Self, i: usize) -> [f64; LANES] {
         // Through a local block, so the conversion vectorises across the cells; the opaque `i`
-        // keeps LLVM from vectorising the caller's loop over populations with
-        // gathers (it did, at half the speed): the conversion vectorises across the cells.
+        // keeps LLVM from vectorising the caller's loop over populations with gathers instead
+        // (it did, at half the speed).
         let w = W[std::hint::black_box(i)];
         let v = (p as *const [f32; LANES]).read_unaligned();
         let mut out = [0.0; LANES];

@@ -517,12 +517,11 @@ impl SettlingRun {
             let u_mean = self.fluid.mean_velocity().z;
             let u_f = (u_mean * v_box - vp * v_solid) / (v_box - v_solid);
             self.latest = -(1.0 - case.volume_fraction) * (vp - u_f) / case.terminal_velocity();
-            let bodies = self.particles.iter().map(|&(b, _)| self.world.bodies[b].mass() * self.world.bodies[b].linvel().z).sum::<Real>();
-            // The fluid outside the bodies (the lattice's less what the bodies carry inside them,
-            // which moves with them and is not physical).
-            let momentum = bodies + case.fluid_density * (v_box - v_solid) * u_f;
-            let scale = n * self.volume * case.density_ratio * case.fluid_density * case.terminal_velocity();
-            out.momentum.push(momentum / scale);
+            // Bodies (all of mass m_p = ρ_p V: N m_p ⟨v_p⟩) and the fluid outside them (the
+            // lattice's less what the bodies carry inside them, which moves with them and is not
+            // physical), over N m_p v_s.
+            let fluid_over_bodies = (v_box - v_solid) / (v_solid * case.density_ratio);
+            out.momentum.push((vp + fluid_over_bodies * u_f) / case.terminal_velocity());
             out.samples.push((self.step as Real * case.dt(), self.latest));
         }
         out.wall_time += start.elapsed().as_secs_f64();
@@ -536,18 +535,18 @@ impl SettlingRun {
 
     /// What was measured, with `⟨v⟩/v_s` averaged over the samples after the transient.
     pub fn finish(mut self) -> SettlingResult {
-        let from = self.case.averaging_start * self.result.steps as Real * self.case.dt();
-        let tail: Vec<Real> = self.result.samples.iter().filter(|s| s.0 >= from).map(|s| s.1).collect();
-        self.result.v_mean_over_vs = tail.iter().sum::<Real>() / tail.len().max(1) as Real;
+        let case = &self.case;
+        let r = &mut self.result;
+        // The samples from the averaging start on (they are in time order).
+        let from = case.averaging_start * r.steps as Real * case.dt();
+        let first = r.samples.iter().position(|s| s.0 >= from).unwrap_or(r.samples.len());
+        let tail = &r.samples[first..];
+        r.v_mean_over_vs = tail.iter().map(|s| s.1).sum::<Real>() / tail.len().max(1) as Real;
         // The momentum's slope over the same window, as a force over the net weight:
         // ΔP / (N m_p v_s) over (1 − ρ_f/ρ_p) g Δt / v_s.
-        let r = &mut self.result;
-        let first = r.samples.iter().position(|s| s.0 >= from);
-        if let (Some(i), Some(&(t1, _)), Some(&p1)) = (first, r.samples.last(), r.momentum.last()) {
-            let dt = t1 - r.samples[i].0;
-            let case = &self.case;
-            if dt > 0.0 {
-                r.momentum_imbalance = (p1 - r.momentum[i]) / ((1.0 - 1.0 / case.density_ratio) * G * dt / case.terminal_velocity());
+        if let (Some(&(t0, _)), Some(&(t1, _)), Some(&p0), Some(&p1)) = (tail.first(), tail.last(), r.momentum.get(first), r.momentum.last()) {
+            if t1 > t0 {
+                r.momentum_imbalance = (p1 - p0) / ((1.0 - 1.0 / case.density_ratio) * G * (t1 - t0) / case.terminal_velocity());
             }
         }
         self.result
