@@ -32,7 +32,7 @@ fn rapier_penetration(world: &discrete_contact::rapier3d_f64::prelude::PhysicsWo
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args = common::Args::from_env();
+    let args = common::Args::from_env(include_str!("drop_in.rs"));
     let n = args.number("--bodies", 180.0) as usize;
     let seconds = args.number("--seconds", 1.0);
     let per_contact = args.number("--per-contact", 6.0);

@@ -54,7 +54,7 @@ struct Run {
 const OPENLB: [(f64, f64, f64); 2] = [(0.15, 2.95, 3.4), (0.30, 1.25, 2.6)];
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args = common::Args::from_env();
+    let args = common::Args::from_env(include_str!("hindered_settling.rs"));
     let dir = common::output_dir();
     if args.flag("--peer-case") {
         return peer_case(&args, &dir);

@@ -41,7 +41,7 @@ struct Run {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args = common::Args::from_env();
+    let args = common::Args::from_env(include_str!("wet_rebound.rs"));
     let quick = args.flag("--quick");
     let dxs = args.list("--dx", if quick { &[1.0, 0.75] } else { &[0.6, 0.3] });
     let h0s = args.list("--h0", &[5.5, 19.6, 35.7]);

@@ -5,7 +5,7 @@
 use std::sync::OnceLock;
 
 use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod};
-use discrete_contact::math::{Real, Vector};
+use discrete_contact::math::{Real, Rotation, Vector};
 use discrete_contact::rapier3d_f64::prelude::*;
 use discrete_contact::validation::wet_rebound::{run, Trajectory, WetRebound};
 use discrete_contact::hlbm::correlations::{di_felice_wall_factor, schiller_naumann_terminal_velocity};
@@ -127,4 +127,72 @@ fn fluid_refuses_bad_input_by_name() {
     let wall = world.insert_collider(ColliderBuilder::ball(1e-3), Some(fixed));
     let mut fluid = Fluid::closed_box(Vector::ZERO, Vector::splat(1e-2), settings).unwrap();
     assert_eq!(name(fluid.couple(&world, wall).unwrap_err()), "collider");
+}
+
+/// The mapping skips SDF evaluations where the distance vouches for the next nodes (an SDF is
+/// 1-Lipschitz) and walks each row in the body's frame: the field it writes must still be the
+/// SDF's `d_B` at every node — here against a brute-force evaluation at every node of the
+/// lattice (every periodic image), for a rotated cuboid, a cylinder and a ball, one of them
+/// across a periodic face, in a periodic and in a walled box.
+#[test]
+fn the_mapped_field_is_every_nodes_solid_fraction() {
+    use discrete_contact::hlbm::solid_fraction;
+    use discrete_contact::{ConvexShape, Sdf};
+    for periodic in [[true, true, false], [false; 3]] {
+        let (dx, size) = (1e-3, Vector::new(24e-3, 20e-3, 22e-3));
+        let mut world = PhysicsWorld::new();
+        let settings = FluidSettings::new(dx, 1e-4, 1e-5, 1000.0).unwrap().with_smoothing(1.5 * dx).unwrap();
+        let mut fluid = Fluid::new(Vector::ZERO, size, periodic, settings).unwrap();
+        let rotation = Rotation::from_scaled_axis(Vector::new(0.3, -0.7, 0.4));
+        let bodies = [
+            (ColliderBuilder::cuboid(3.1e-3, 2.2e-3, 4.3e-3), Vector::new(6.3e-3, 7.7e-3, 8.1e-3), rotation),
+            (ColliderBuilder::cylinder(2.6e-3, 3.4e-3), Vector::new(if periodic[0] { 0.9e-3 } else { 18.2e-3 }, 12.4e-3, 13.6e-3), rotation.inverse()),
+            (ColliderBuilder::ball(3.7e-3), Vector::new(17.5e-3, 4.0e-3, 5.5e-3), Rotation::IDENTITY),
+        ];
+        let mut shapes = Vec::new();
+        for (builder, at, rot) in bodies {
+            let body = world.insert_body(RigidBodyBuilder::dynamic().translation(at).rotation(rot.to_scaled_axis()));
+            let collider = world.insert_collider(builder.density(2000.0), Some(body));
+            fluid.couple(&world, collider).unwrap();
+            shapes.push((ConvexShape::from_parry(world.colliders[collider].shape()).unwrap(), *world.colliders[collider].position()));
+        }
+        fluid.step(&mut world, None).unwrap();
+        let lattice = fluid.lattice();
+        let [nx, ny, nz] = lattice.dims();
+        let lengths = Vector::new((nx as Real) * dx, (ny as Real) * dx, (nz as Real) * dx);
+        let (mut nodes, mut checked) = (0, 0);
+        for z in 0..nz {
+            for y in 0..ny {
+                let row = lattice.particles.row(z * ny + y);
+                nodes += row.len();
+                for x in 0..nx {
+                    let p = fluid.origin() + Vector::new(x as Real, y as Real, z as Real) * dx;
+                    // Every body at every periodic image; at most one reaches a node here.
+                    let mut expected = None;
+                    for (id, (shape, pose)) in shapes.iter().enumerate() {
+                        let images = |d: usize| if periodic[d] { vec![-1.0, 0.0, 1.0] } else { vec![0.0] };
+                        for shift in images(0).into_iter().flat_map(|sx| images(1).into_iter().map(move |sy| Vector::new(sx, sy, 0.0) * lengths)) {
+                            let d_b = solid_fraction(shape.distance(pose.inverse() * (p + shift)), 1.5 * dx);
+                            if d_b > 0.0 && !lattice.is_solid(lattice.index(x, y, z)) {
+                                assert!(expected.is_none(), "two bodies reach node ({x}, {y}, {z})");
+                                expected = Some((id as u32, d_b));
+                            }
+                        }
+                    }
+                    let mapped = row.iter().find(|n| n.x as usize == x).map(|n| (n.id, n.d_b));
+                    match (mapped, expected) {
+                        (None, None) => {}
+                        (Some((id, got)), Some((want_id, want))) => {
+                            assert_eq!(id, want_id, "node ({x}, {y}, {z})");
+                            assert!((got - want).abs() < 1e-9, "node ({x}, {y}, {z}): d_B {got} vs {want}");
+                            checked += 1;
+                        }
+                        _ => panic!("node ({x}, {y}, {z}): mapped {mapped:?}, expected {expected:?}"),
+                    }
+                }
+            }
+        }
+        assert_eq!(nodes, checked);
+        assert!(checked > 300, "{checked} nodes");
+    }
 }

@@ -98,9 +98,26 @@ pub fn eoc(n: &[f64], err: &[f64]) -> f64 {
 pub struct Args(Vec<String>);
 
 impl Args {
-    /// The process's arguments.
-    pub fn from_env() -> Self {
-        Self(std::env::args().collect())
+    /// The process's arguments, checked against the example's source `source` (pass
+    /// `include_str!("<example>.rs")`): its leading `//!` doc is the usage text, and every
+    /// `--option` it names is known. `--help` prints that text and exits; an option it does not
+    /// name is refused (exit 2) rather than ignored — a mistyped option would otherwise start
+    /// the default run, which can take an hour.
+    pub fn from_env(source: &str) -> Self {
+        let usage: String = source.lines().map_while(|l| l.strip_prefix("//!")).map(|l| format!("{}\n", l.strip_prefix(' ').unwrap_or(l))).collect();
+        let args: Vec<String> = std::env::args().collect();
+        if args.iter().skip(1).any(|a| a == "--help" || a == "-h") {
+            print!("{usage}");
+            std::process::exit(0);
+        }
+        let known = |a: &str| {
+            usage.match_indices(a).any(|(i, _)| !usage[i + a.len()..].starts_with(|c: char| c.is_ascii_alphanumeric() || c == '-'))
+        };
+        if let Some(bad) = args.iter().skip(1).find(|a| a.starts_with("--") && !known(a)) {
+            eprintln!("unknown option {bad}; the options are (--help prints this):\n\n{usage}");
+            std::process::exit(2);
+        }
+        Self(args)
     }
 
     /// Whether `name` was given.

@@ -106,6 +106,13 @@ macro_rules! for_each_pair {
 #[inline(always)]
 pub fn collide(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES]; 3]>) -> ([f64; LANES], [[f64; LANES]; 3]) {
     let (rho, u) = moments(f);
+    collide_at(f, omega, du, rho, u)
+}
+
+/// [`collide`] with the block's [`moments`] `(ρ, u)` already taken (a block with particle
+/// nodes needs `u` for its forcing term first).
+#[inline(always)]
+pub fn collide_at(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES]; 3]>, rho: [f64; LANES], u: [[f64; LANES]; 3]) -> ([f64; LANES], [[f64; LANES]; 3]) {
     let mut usq = [0.0; LANES];
     for l in 0..LANES {
         usq[l] = 1.5 * (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]);

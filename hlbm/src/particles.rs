@@ -17,7 +17,8 @@ pub struct ParticleNode {
     /// taken on the particle's side of a periodic face, so the moment is right for a particle
     /// that straddles one.
     pub arm: [f64; 3],
-    /// Particle id (reported back with its force).
+    /// Particle id (reported back with its force), below `u32::MAX - 1` (the two largest
+    /// values mark "no particle" and walls inside the lattice).
     pub id: u32,
 }
 
@@ -128,11 +129,14 @@ impl ParticleField {
                 let r = fill(z, &mut |y, node| slab[y].push(node));
                 let mut count = 0;
                 for row in slab.iter_mut() {
-                    row.sort_by_key(|n| n.x);
-                    row.dedup_by(|later, kept| later.x == kept.x && {
-                        superpose(kept, later);
-                        true
-                    });
+                    // Most rows come in order, each node once: one pass tells.
+                    if !row.is_sorted_by(|a, b| a.x < b.x) {
+                        row.sort_by_key(|n| n.x);
+                        row.dedup_by(|later, kept| later.x == kept.x && {
+                            superpose(kept, later);
+                            true
+                        });
+                    }
                     count += row.len();
                 }
                 (r, count)
