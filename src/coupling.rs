@@ -284,7 +284,6 @@ impl Fluid {
         let dims = self.lattice.dims();
         let to_lattice = self.units.velocity_to_lattice(1.0);
         let half = 0.5 * self.smoothing;
-        let inv_dx = 1.0 / dx;
         let periodic = self.domain.periodic();
         let mut placed = Vec::with_capacity(self.bodies.len());
         let mut fastest: Real = 0.0;
@@ -333,35 +332,10 @@ impl Fluid {
                 let (mut cf, mut cm) = (Vector::ZERO, Vector::ZERO);
                 for j in b.ranges[1].0..=b.ranges[1].1 {
                     let y = wrap(j, 1);
-                    // Along the row the distance changes by at most dx per node (an SDF is
-                    // 1-Lipschitz): a node at d past the band's outer edge vouches for the
-                    // next ⌊(d − ε/2)/dx⌋ nodes being outside too, one past its inner edge for
-                    // ⌊(−ε/2 − d)/dx⌋ nodes having d_B = 1 — their SDF is not evaluated (the
-                    // field is the same; ~half the evaluations of a ball saved).
-                    let mut solid_until = i64::MIN;
-                    let i0 = b.ranges[0].0;
-                    // The row in the body's frame: its first node and the step between nodes
-                    // (a multiply-add per node instead of a whole rigid transform).
-                    let local0 = b.inverse * (origin + Vector::new(i0 as Real, j as Real, k as Real) * dx);
-                    let local_step = b.inverse.rotation * Vector::new(dx, 0.0, 0.0);
-                    let mut i = i0;
-                    while i <= b.ranges[0].1 {
+                    for i in b.ranges[0].0..=b.ranges[0].1 {
                         let p = origin + Vector::new(i as Real, j as Real, k as Real) * dx;
-                        let d_b = if i < solid_until {
-                            1.0
-                        } else {
-                            let d = b.shape.distance(local0 + local_step * (i - i0) as Real);
-                            if d >= half {
-                                i += 1 + nodes_within(d - half, inv_dx);
-                                continue;
-                            }
-                            if d <= -half {
-                                solid_until = i + 1 + nodes_within(-half - d, inv_dx);
-                            }
-                            solid_fraction(d, smoothing)
-                        };
+                        let d_b = solid_fraction(b.shape.distance(b.inverse * p), smoothing);
                         let x = wrap(i, 0);
-                        i += 1;
                         if d_b <= 0.0 || walls && lattice.is_solid(lattice.index(x, y, z)) {
                             continue;
                         }
@@ -471,13 +445,4 @@ impl Fluid {
     pub fn write_vtk(&self, path: &std::path::Path) -> Result<()> {
         Ok(hlbm::vtk::write(&self.lattice, path, self.units.dx(), self.units.velocity_to_physical(1.0))?)
     }
-}
-
-/// How many nodes past one whose distance is `margin >= 0` beyond a level (spacing `dx`, given
-/// as `1/dx`) an SDF's level cannot reach: ⌊margin/dx⌋, less a hair so rounding never counts
-/// one too many. (The cast truncates, which for these non-negative values is the floor: a
-/// `floor` call, not inlined on a portable x86-64 build, cost 15 % of the mapping.)
-#[inline]
-fn nodes_within(margin: Real, inv_dx: Real) -> i64 {
-    (margin * inv_dx * (1.0 - 1e-9) - 1e-9).max(0.0) as i64
 }

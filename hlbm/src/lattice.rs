@@ -721,12 +721,13 @@ impl Lattice {
     /// Marks, for every particle node, the links that leave its particle: to a node that is
     /// fluid (not a wall) and not covered by the same particle.
     ///
-    /// Through a dense owner field (particle id + 1 per node, 0 where none; 4 B per node),
-    /// updated sparsely — the last step's nodes cleared, this step's set — slab by slab on all
-    /// cores; then, per row with particle nodes and per direction, one pass compares the owners
-    /// along the row's span of particle nodes with those of the neighbouring row it points
-    /// into. (Walking each row's nine neighbouring rows in the sparse field instead measured
-    /// ~2× slower; doing this block by block inside the sweep, slower too.)
+    /// Through a dense owner field (particle id + 1 per node, [`WALL_OWNER`] on walls, 0
+    /// elsewhere; 4 B per node), updated sparsely — the last step's nodes cleared, this step's
+    /// set — slab by slab on all cores; then, per row with particle nodes and per direction,
+    /// one pass ([`row_links`]) compares the owners along the row's span of particle nodes
+    /// with those of the neighbouring row it points into. (Walking each row's nine neighbouring
+    /// rows in the sparse field instead measured ~2× slower; doing this block by block inside
+    /// the sweep, slower too.)
     fn find_links(&mut self) {
         let (nx, ny, nz) = (self.nx, self.ny, self.nz);
         let kind = &self.kind;
