@@ -330,12 +330,16 @@ impl Fluid {
                 let b = &placed[i];
                 let (v0, w0, c0) = b.previous;
                 let (mut cf, mut cm) = (Vector::ZERO, Vector::ZERO);
+                // The row's first node wrapped once; the rest at most once more (a range spans
+                // at most the lattice): no integer division per node.
+                let (lo, x_lo) = (b.ranges[0].0, wrap(b.ranges[0].0, 0));
                 for j in b.ranges[1].0..=b.ranges[1].1 {
                     let y = wrap(j, 1);
-                    for i in b.ranges[0].0..=b.ranges[0].1 {
+                    for i in lo..=b.ranges[0].1 {
                         let p = origin + Vector::new(i as Real, j as Real, k as Real) * dx;
                         let d_b = solid_fraction(b.shape.distance(b.inverse * p), smoothing);
-                        let x = wrap(i, 0);
+                        let x = x_lo + (i - lo) as usize;
+                        let x = if x >= dims[0] { x - dims[0] } else { x };
                         if d_b <= 0.0 || walls && lattice.is_solid(lattice.index(x, y, z)) {
                             continue;
                         }
