@@ -277,8 +277,12 @@ impl SettlingResult {
     }
 }
 
-/// Random non-overlapping poses of `n` particles in the periodic box (random sequential
-/// addition, gap at least a quarter `Δx` so no contact starts at once).
+/// Random non-overlapping poses of `n` particles in the periodic box, gap at least a quarter
+/// `Δx` so no contact starts at once: random sequential addition; where that finds no free
+/// spot (randomly oriented cubes jam before φ = 30 %), a simple or face-centred cubic lattice
+/// of at least `n` sites (whichever spaces them wider) filled in random order, each particle at its site with a random orientation redrawn until
+/// it clears its neighbours (a site with no room stays empty) — the settling transient then
+/// randomises the arrangement.
 pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
     case.check()?;
     let l = case.box_length();
@@ -287,60 +291,88 @@ pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
     let radius = shape.compute_local_bounding_sphere().radius();
     let gap = 0.25 * case.dx();
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(case.seed);
-    let mut placed: Vec<Pose> = Vec::with_capacity(n);
     // A cell list of the placed particles, cells at least one bounding diameter wide.
     let cells = ((l / (2.0 * radius + gap)).floor() as usize).max(1);
     let cell_of = |p: Vector| -> [usize; 3] { std::array::from_fn(|d| ((p[d] / l * cells as Real) as usize).min(cells - 1)) };
-    let mut grid: Vec<Vec<usize>> = vec![Vec::new(); cells * cells * cells];
     let index = |c: [usize; 3]| (c[2] * cells + c[1]) * cells + c[0];
-    let tries = 200_000;
-    for _ in 0..n {
-        let mut done = false;
-        for _ in 0..tries {
-            let centre = Vector::new(rng.random::<Real>() * l, rng.random::<Real>() * l, rng.random::<Real>() * l);
-            let rotation = match case.shape {
-                ParticleShape::Sphere => Rotation::IDENTITY,
-                ParticleShape::Cube => {
-                    let q = [0; 4].map(|_| rng.random::<Real>() * 2.0 - 1.0);
-                    Rotation::from_xyzw(q[0], q[1], q[2], q[3]).normalize()
-                }
-            };
-            let pose = Pose::from_parts(centre, rotation);
-            let c = cell_of(centre);
-            let span = |d: usize| -> Vec<usize> {
-                let mut v: Vec<usize> = [-1i64, 0, 1].iter().map(|o| (c[d] as i64 + o).rem_euclid(cells as i64) as usize).collect();
-                v.sort_unstable();
-                v.dedup();
-                v
-            };
-            let free = span(2).iter().all(|&z| {
-                span(1).iter().all(|&y| {
-                    span(0).iter().all(|&x| {
-                        grid[index([x, y, z])].iter().all(|&j| {
-                            let mut other = placed[j];
-                            other.translation += domain.nearest_image_shift(centre, other.translation);
-                            let d = (other.translation - centre).length();
-                            d > 2.0 * radius + gap
-                                || (case.shape == ParticleShape::Cube
-                                    && query::distance(&pose, shape.as_ref(), &other, shape.as_ref()).is_ok_and(|d| d.distance > gap))
-                        })
+    // Whether `pose` keeps the gap to every particle placed so far.
+    let free = |pose: &Pose, placed: &[Pose], grid: &[Vec<usize>]| {
+        let centre = pose.translation;
+        let c = cell_of(centre);
+        let span = |d: usize| -> Vec<usize> {
+            let mut v: Vec<usize> = [-1i64, 0, 1].iter().map(|o| (c[d] as i64 + o).rem_euclid(cells as i64) as usize).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        span(2).iter().all(|&z| {
+            span(1).iter().all(|&y| {
+                span(0).iter().all(|&x| {
+                    grid[index([x, y, z])].iter().all(|&j| {
+                        let mut other = placed[j];
+                        other.translation += domain.nearest_image_shift(centre, other.translation);
+                        let d = (other.translation - centre).length();
+                        d > 2.0 * radius + gap
+                            || (case.shape == ParticleShape::Cube && query::distance(pose, shape.as_ref(), &other, shape.as_ref()).is_ok_and(|d| d.distance > gap))
                     })
                 })
-            });
-            if free {
-                grid[index(c)].push(placed.len());
+            })
+        })
+    };
+    let orientation = |rng: &mut Xoshiro256PlusPlus| match case.shape {
+        ParticleShape::Sphere => Rotation::IDENTITY,
+        ParticleShape::Cube => {
+            let q = [0; 4].map(|_| rng.random::<Real>() * 2.0 - 1.0);
+            Rotation::from_xyzw(q[0], q[1], q[2], q[3]).normalize()
+        }
+    };
+    let tries = 200_000;
+    let mut grid: Vec<Vec<usize>> = vec![Vec::new(); cells * cells * cells];
+    let mut placed: Vec<Pose> = Vec::with_capacity(n);
+    'rsa: for _ in 0..n {
+        for _ in 0..tries {
+            let centre = Vector::new(rng.random::<Real>() * l, rng.random::<Real>() * l, rng.random::<Real>() * l);
+            let pose = Pose::from_parts(centre, orientation(&mut rng));
+            if free(&pose, &placed, &grid) {
+                grid[index(cell_of(centre))].push(placed.len());
                 placed.push(pose);
-                done = true;
-                break;
+                continue 'rsa;
             }
         }
-        if !done {
-            return Err(Error::InvalidParameter {
-                name: "volume_fraction",
-                value: case.volume_fraction,
-                allowed: "a fraction random sequential addition reaches (placement found no free spot)",
-            });
+        // Jammed: start again on a lattice — simple cubic (m³ sites) or face-centred (4 k³),
+        // whichever keeps neighbours further apart for n particles.
+        let m = (1..).find(|m| m * m * m >= n).unwrap_or(1);
+        let k = (1..).find(|k| 4 * k * k * k >= n).unwrap_or(1);
+        let fcc = l / k as Real / std::f64::consts::SQRT_2 > l / m as Real;
+        let mut sites: Vec<Vector> = if fcc {
+            let basis = [[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]];
+            (0..k * k * k).flat_map(|c| basis.map(|b| (Vector::new((c % k) as Real, ((c / k) % k) as Real, (c / (k * k)) as Real) + Vector::from_array(b) + Vector::splat(0.25)) * (l / k as Real))).collect()
+        } else {
+            (0..m * m * m).map(|c| (Vector::new((c % m) as Real, ((c / m) % m) as Real, (c / (m * m)) as Real) + Vector::splat(0.5)) * (l / m as Real)).collect()
+        };
+        for i in (1..sites.len()).rev() {
+            sites.swap(i, rng.random_range(0..=i));
         }
+        grid.iter_mut().for_each(Vec::clear);
+        placed.clear();
+        for &centre in &sites {
+            if placed.len() == n {
+                break;
+            }
+            // A site its placed neighbours leave no room at stays empty (there are spares).
+            if let Some(pose) = (0..200).map(|_| Pose::from_parts(centre, orientation(&mut rng))).find(|p| free(p, &placed, &grid)) {
+                grid[index(cell_of(centre))].push(placed.len());
+                placed.push(pose);
+            }
+        }
+        break;
+    }
+    if placed.len() < n {
+        return Err(Error::InvalidParameter {
+            name: "volume_fraction",
+            value: case.volume_fraction,
+            allowed: "a fraction random sequential addition or a randomly filled cubic lattice reaches (no free spot found)",
+        });
     }
     Ok(placed)
 }
