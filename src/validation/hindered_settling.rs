@@ -280,9 +280,9 @@ impl SettlingResult {
 /// Random non-overlapping poses of `n` particles in the periodic box, gap at least a quarter
 /// `Δx` so no contact starts at once: random sequential addition; where that finds no free
 /// spot (randomly oriented cubes jam before φ = 30 %), a simple or face-centred cubic lattice
-/// of at least `n` sites (whichever spaces them wider) filled in random order, each particle at its site with a random orientation redrawn until
-/// it clears its neighbours (a site with no room stays empty) — the settling transient then
-/// randomises the arrangement.
+/// of at least `n` sites (whichever spaces them wider) filled in random order, each particle
+/// at its site with a random orientation redrawn until it clears its neighbours (a site with
+/// no room stays empty) — the settling transient then randomises the arrangement.
 pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
     case.check()?;
     let l = case.box_length();
