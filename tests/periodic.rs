@@ -140,8 +140,9 @@ fn a_periodic_wet_run_gives_the_same_result_on_one_and_two_threads() {
 
 /// A sphere alone in a triply periodic box is a simple cubic array: in Stokes flow it settles
 /// at `U_stokes / K(φ)` (Hasimoto; Sangani & Acrivos): 0.35 `U_stokes` at φ = 6.5 %, 0.65 at
-/// 0.8 % (measured here 0.48 and 0.78: the lattice sphere is a little smaller). The lattice sphere's hydrodynamic radius differs from its geometric one by a
-/// fraction of `Δx`, so each run is turned into the effective radius that `K` implies; the two
+/// 0.8 % (measured here 0.48 and 0.78: the lattice sphere is a little smaller). The lattice
+/// sphere's hydrodynamic radius differs from its geometric one by a fraction of `Δx`, so each
+/// run is turned into the effective radius that `K` implies; the two
 /// box sizes must give the same one (measured: 0.877 and 0.885 of the geometric radius, 0.9 %
 /// apart). Without the body force's share on the sphere (the mean pressure gradient's push on
 /// its volume) the dense case settles 6 % faster and the two radii are 3.4 % apart.

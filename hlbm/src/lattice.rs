@@ -615,7 +615,7 @@ impl Lattice {
                 (m, p)
             })
             .collect();
-        slabs.into_iter().fold((0.0, [0.0; 3]), |(m, p), (ms, ps)| (m + ms, [p[0] + ps[0], p[1] + ps[1], p[2] + ps[2]]))
+        add_slabs(slabs)
     }
 
     /// [`Lattice::totals`] of a lattice without solid nodes: every stored population belongs
@@ -647,17 +647,13 @@ impl Lattice {
                 (m, p)
             })
             .collect();
-        slabs.into_iter().fold((0.0, [0.0; 3]), |(m, p), (ms, ps)| (m + ms, [p[0] + ps[0], p[1] + ps[1], p[2] + ps[2]]))
+        add_slabs(slabs)
     }
 
     #[inline]
     fn neighbour(&self, x: usize, y: usize, z: usize, c: [i32; 3], sign: i64) -> usize {
-        // |c| <= 1: one compare wraps (an integer division per axis made `totals` ~3× slower).
-        let w = |v: usize, d: i32, n: usize| match v as i64 + sign * d as i64 {
-            -1 => n - 1,
-            i if i == n as i64 => 0,
-            i => i as usize,
-        };
+        // (An integer division per axis here made `totals` ~3× slower.)
+        let w = |v: usize, d: i32, n: usize| wrap_step(v, sign * d as i64, n);
         self.index(w(x, c[0], self.nx), w(y, c[1], self.ny), w(z, c[2], self.nz))
     }
 
@@ -856,22 +852,12 @@ impl Lattice {
                 wr_row[i] = OPP[i] * n + base;
             }
         }
-        // |offset| <= 1, so one compare wraps (no integer division).
-        let wrap = |x: i64| {
-            if x < 0 {
-                (x + nx as i64) as usize
-            } else if x >= nx as i64 {
-                (x - nx as i64) as usize
-            } else {
-                x as usize
-            }
-        };
         // Where population i of cell x goes (or comes from) in this sweep: slot `stored` of the
         // neighbour's row `row` at x + dx — unless that neighbour is solid in an odd step
         // (halfway bounce-back): then the cell's own slot `own`, with the moving-wall term that
         // a pull adds and a push subtracts. One rule for gather and scatter.
         let slot = |i: usize, x: usize, row: usize, dx: i64, stored: usize, own: usize, slow: bool| -> (usize, f64) {
-            let sx = wrap(x as i64 + dx);
+            let sx = wrap_step(x, dx, nx);
             // Only blocks next to a solid node (`slow`) can have one as neighbour.
             let k = if odd && slow { self.kind[row - stored * n + sx] } else { 0 };
             if k != 0 {
@@ -1154,14 +1140,8 @@ fn row_links_generic(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [us
     let hi = (last as usize + 1).min(nx - 1).max(lo);
     span[lo..hi].fill(0);
     let mut ends = [0u32; 2];
-    // Offsets are at most 1: one compare wraps (no integer division).
-    let wrap = |v: usize, d: i64, n: usize| match v as i64 + d {
-        -1 => n - 1,
-        w if w == n as i64 => 0,
-        w => w as usize,
-    };
     for (dy, dz, dirs) in NEIGHBOUR_ROWS {
-        let base = (wrap(z, dz, nz) * ny + wrap(y, dy, ny)) * nx;
+        let base = (wrap_step(z, dz, nz) * ny + wrap_step(y, dy, ny)) * nx;
         for &(dx, i) in dirs {
             let from = (base + lo) as i64 + dx;
             let theirs = &owner[from as usize..from as usize + (hi - lo)];
@@ -1169,7 +1149,7 @@ fn row_links_generic(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [us
                 *m |= (((o != mine) & (o != WALL_OWNER)) as u32) << i;
             }
             for (e, x) in [0, nx - 1].into_iter().enumerate() {
-                let n = base + wrap(x, dx, nx);
+                let n = base + wrap_step(x, dx, nx);
                 if owner[n] != owner[own + x] && owner[n] != WALL_OWNER {
                     ends[e] |= 1 << i;
                 }
@@ -1181,6 +1161,22 @@ fn row_links_generic(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [us
         x if x == nx - 1 => ends[1],
         x => span[x],
     }));
+}
+
+/// The mass and momentum of all slabs, added in slab order (the same sum for any thread
+/// count).
+fn add_slabs(slabs: Vec<(f64, [f64; 3])>) -> (f64, [f64; 3]) {
+    slabs.into_iter().fold((0.0, [0.0; 3]), |(m, p), (ms, ps)| (m + ms, [p[0] + ps[0], p[1] + ps[1], p[2] + ps[2]]))
+}
+
+/// `v + d` wrapped into `0..n` for a step `|d| <= 1`: one compare, no integer division.
+#[inline(always)]
+fn wrap_step(v: usize, d: i64, n: usize) -> usize {
+    match v as i64 + d {
+        -1 => n - 1,
+        w if w == n as i64 => 0,
+        w => w as usize,
+    }
 }
 
 /// The owner field's mark for a wall node (no particle id + 1 reaches it).

@@ -344,11 +344,13 @@ pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
         let m = (1..).find(|m| m * m * m >= n).unwrap_or(1);
         let k = (1..).find(|k| 4 * k * k * k >= n).unwrap_or(1);
         let fcc = l / k as Real / std::f64::consts::SQRT_2 > l / m as Real;
+        // Cell `c` of an `a × a × a` split of the box, as its corner in cell widths.
+        let corner = |c: usize, a: usize| Vector::new((c % a) as Real, ((c / a) % a) as Real, (c / (a * a)) as Real);
         let mut sites: Vec<Vector> = if fcc {
-            let basis = [[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]];
-            (0..k * k * k).flat_map(|c| basis.map(|b| (Vector::new((c % k) as Real, ((c / k) % k) as Real, (c / (k * k)) as Real) + Vector::from_array(b) + Vector::splat(0.25)) * (l / k as Real))).collect()
+            let basis = [[0.25, 0.25, 0.25], [0.75, 0.75, 0.25], [0.75, 0.25, 0.75], [0.25, 0.75, 0.75]];
+            (0..k * k * k).flat_map(|c| basis.map(|b| (corner(c, k) + Vector::from_array(b)) * (l / k as Real))).collect()
         } else {
-            (0..m * m * m).map(|c| (Vector::new((c % m) as Real, ((c / m) % m) as Real, (c / (m * m)) as Real) + Vector::splat(0.5)) * (l / m as Real)).collect()
+            (0..m * m * m).map(|c| (corner(c, m) + Vector::splat(0.5)) * (l / m as Real)).collect()
         };
         for i in (1..sites.len()).rev() {
             sites.swap(i, rng.random_range(0..=i));
