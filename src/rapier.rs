@@ -263,12 +263,9 @@ impl DiscreteContacts {
             allowed: "a handle of a collider in this world",
         })?;
         let shape = ConvexShape::from_parry(co.shape())?;
+        let (centre, radius) = shape.bounding_sphere();
         let b = shape.local_bounds();
-        let (centre, radius, half_size) = if b.mins.is_finite() && b.maxs.is_finite() {
-            ((b.mins + b.maxs) * 0.5, (b.maxs - b.mins).length() * 0.5, (b.maxs - b.mins).min_element() * 0.5)
-        } else {
-            (Vector::ZERO, Real::INFINITY, Real::INFINITY)
-        };
+        let half_size = if radius.is_finite() { (b.maxs - b.mins).min_element() * 0.5 } else { Real::INFINITY };
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
         self.handled.insert(collider, Handled { shape, material, centre, radius, half_size });
         self.generation += 1;

@@ -41,6 +41,15 @@ pub trait Sdf: Send + Sync {
     /// Bounding box of the body in its frame; components may be infinite (a half-space).
     fn local_bounds(&self) -> Aabb;
 
+    /// A sphere `(centre, radius)` enclosing the body, in its frame; the radius is infinite
+    /// for an unbounded body. The default encloses [`local_bounds`](Self::local_bounds) (its
+    /// half diagonal, √3 times a ball's radius); the built-in shapes give a tighter one (a
+    /// ball's own), which keeps contact candidates and sub-step estimates to the pairs that
+    /// can touch.
+    fn bounding_sphere(&self) -> (Vector, Real) {
+        box_sphere(&self.local_bounds())
+    }
+
     /// Where the surface dilated by `offset` — the zero level of `distance − offset` — crosses
     /// the segment `p`–`q` (body frame), as the fraction `t ∈ [0, 1]` of the way from `p`, for
     /// shapes that know it in closed form. Called only when `p` and `q` lie strictly on
@@ -71,6 +80,16 @@ pub trait Sdf: Send + Sync {
     /// the same closed form); `None` (the default) otherwise.
     fn half_space_normal(&self) -> Option<Vector> {
         None
+    }
+}
+
+/// The sphere through the corners of `b` (`(centre, radius)`); radius infinite for an
+/// unbounded box.
+fn box_sphere(b: &Aabb) -> (Vector, Real) {
+    if b.mins.is_finite() && b.maxs.is_finite() {
+        ((b.mins + b.maxs) * 0.5, (b.maxs - b.mins).length() * 0.5)
+    } else {
+        (Vector::ZERO, Real::INFINITY)
     }
 }
 
@@ -637,6 +656,24 @@ impl Sdf for ConvexShape {
         match self {
             Self::Ball { radius } => Some(*radius),
             _ => None,
+        }
+    }
+
+    fn bounding_sphere(&self) -> (Vector, Real) {
+        match self {
+            Self::Ball { radius } => (Vector::ZERO, *radius),
+            // Rims at y = ±h (a cone's apex lies inside the same sphere).
+            Self::Cylinder { half_height, radius } | Self::Cone { half_height, radius } => (Vector::ZERO, radius.hypot(*half_height)),
+            Self::Capsule { a, b, radius } => ((*a + *b) * 0.5, 0.5 * (*b - *a).length() + radius),
+            Self::Polyhedron(p) => {
+                let centre = (p.bounds.mins + p.bounds.maxs) * 0.5;
+                (centre, p.faces.iter().flatten().map(|v| (*v - centre).length()).fold(0.0, Real::max))
+            }
+            Self::Rounded { inner, border_radius } => {
+                let (centre, r) = inner.bounding_sphere();
+                (centre, r + border_radius)
+            }
+            _ => box_sphere(&self.local_bounds()),
         }
     }
 

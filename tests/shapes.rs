@@ -230,3 +230,32 @@ fn closed_form_crossings_equal_the_distance_functions_root() {
     assert!(ConvexShape::cone(0.2, 0.1).unwrap().segment_crossing(Vector::ZERO, Vector::X, 0.0).is_none());
     assert!(ConvexShape::cuboid(Vector::splat(0.1)).unwrap().segment_crossing(Vector::ZERO, Vector::X, 0.01).is_none());
 }
+
+/// Each built-in shape's bounding sphere holds the whole body and touches it: over 4000
+/// directions, parry's support points (the body's extreme points) lie inside the sphere and
+/// the farthest reaches its surface (a sphere round the bounding box, √3 times a ball's
+/// radius, would fail that). The contact candidates and sub-step estimates rest on it.
+#[test]
+fn bounding_spheres_enclose_the_body_and_touch_it() {
+    let mut rng = Lcg(11);
+    let round = SharedShape::round_cuboid(0.2, 0.1, 0.05, 0.03);
+    let mut shapes = parry_shapes();
+    shapes.push(("round cuboid", Box::new(*round.as_round_cuboid().unwrap())));
+    for (name, shape) in shapes {
+        let sdf = ConvexShape::from_parry(shape.as_ref()).unwrap();
+        let (centre, radius) = sdf.bounding_sphere();
+        let support = shape.as_support_map().expect("a support-mapped shape");
+        let mut farthest: f64 = 0.0;
+        for _ in 0..4000 {
+            let u = rng.point(1.0).normalize_or_zero();
+            if u == Vector::ZERO {
+                continue;
+            }
+            let s = support.local_support_point(u);
+            let reach = (s - centre).length();
+            assert!(reach <= radius * (1.0 + 1e-12), "{name}: extreme point {s:?} at {reach} outside the radius {radius}");
+            farthest = farthest.max(reach);
+        }
+        assert!(farthest >= radius * (1.0 - 1e-3), "{name}: radius {radius}, the body reaches only {farthest}");
+    }
+}

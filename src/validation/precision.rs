@@ -53,7 +53,7 @@ impl Impact {
 
     /// Runs the impact with the state in f64 (`f32_state = false`) or rounded to f32 after every
     /// sub-step. The step is a 40th of the sphere's Hertz contact time (within the drop-in's
-    /// advice, which takes the bounding sphere's radius, √3 r), one sub-step per step.
+    /// advice, which takes the bounding sphere's radius, here r), one sub-step per step.
     pub fn run(&self, f32_state: bool) -> Result<Ending> {
         let (r, e, density) = (RADIUS, 0.85, 7800.0);
         let material = Material::new(self.youngs, 0.3)?;
