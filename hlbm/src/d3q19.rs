@@ -95,6 +95,7 @@ macro_rules! for_each_pair {
         $body!(9, 18, 0.0, 1.0, -1.0, 1.0 / 36.0);
     };
 }
+pub(crate) use for_each_pair;
 
 /// BGK collision of a block in place: `f ← f + ω (f_eq(u) - f)`, plus the exact-difference
 /// source `f_eq(u + Δu) - f_eq(u)` when `du` is given. Returns `(ρ, u + Δu/2)`, the physical
