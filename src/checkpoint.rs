@@ -44,8 +44,9 @@ use crate::error::{CheckpointProblem, Error, Result};
 use crate::io::{io_error, write_atomically};
 
 /// The checkpoint format this build writes and reads (2: `OverlapSettings` carries
-/// `exact_polyhedra`; 3: a settling run's result carries its momentum series).
-pub const FORMAT_VERSION: u32 = 3;
+/// `exact_polyhedra`; 3: a settling run's result carries its momentum series; 4: the lattice's
+/// particle nodes name their body, whose motion is stored once).
+pub const FORMAT_VERSION: u32 = 4;
 
 /// Signature at the start of every checkpoint (a non-text byte first, as PNG does, so a text
 /// file is never mistaken for one).

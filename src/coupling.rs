@@ -53,7 +53,7 @@
 //! ```
 
 pub use hlbm::ForceMethod;
-use hlbm::{solid_fraction, Lattice, ParticleNode, UnitConverter};
+use hlbm::{solid_fraction, Lattice, ParticleBody, ParticleNode, UnitConverter};
 use rapier3d_f64::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
 
 use crate::error::{check_positive, Error, Result};
@@ -127,6 +127,9 @@ struct Placed<'a> {
     previous: (Vector, Vector, Vector),
     /// Node index ranges (unwrapped across periodic faces).
     ranges: [(i64, i64); 3],
+    /// Whole box lengths (in nodes) that bring the ranges' start into the lattice: relative to
+    /// it every node lies on image 0 or 1, whichever box the body has drifted to.
+    base: [i64; 3],
 }
 
 /// What one fluid step did.
@@ -309,7 +312,8 @@ impl Fluid {
             for k in ranges[2].0..=ranges[2].1 {
                 by_slab[k.rem_euclid(dims[2] as i64) as usize].push((placed.len(), k));
             }
-            placed.push(Placed { id, shape: &b.shape, inverse: pose.inverse(), com, v, w, previous: b.previous, ranges });
+            let base = [0, 1, 2].map(|d| ranges[d].0.div_euclid(dims[d] as i64) * dims[d] as i64);
+            placed.push(Placed { id, shape: &b.shape, inverse: pose.inverse(), com, v, w, previous: b.previous, ranges, base });
             b.previous = (v, w, com);
         }
         // Each slab's bodies from low x to high, so that a row gets its nodes in order unless
@@ -318,16 +322,37 @@ impl Fluid {
         for slab in &mut by_slab {
             slab.sort_by_key(|&(i, _)| (placed[i].ranges[0].0, i));
         }
+        // Each body's rigid motion once (lattice units); the nodes name it by its index here.
+        let spin = self.units.dt();
+        let motions = placed
+            .iter()
+            .map(|b| ParticleBody {
+                id: b.id as u32,
+                centre: ((b.com - self.origin) / dx - Vector::from_array(b.base.map(|n| n as Real))).to_array(),
+                velocity: (b.v * to_lattice).to_array(),
+                spin: (b.w * spin).to_array(),
+            })
+            .collect();
         let mut field = std::mem::take(&mut self.lattice.particles);
         let (origin, smoothing, lattice) = (self.origin, self.smoothing, &self.lattice);
         let inner_fluid = lattice.force_method() == ForceMethod::Forcing;
         // A fully periodic box without walls need not look up every node's kind.
         let walls = lattice.has_solid();
         let wrap = |i: i64, d: usize| i.rem_euclid(dims[d] as i64) as usize;
-        let partial = field.fill_slabs(|z, push| {
+        // The periodic image of unwrapped node index `i` (relative to the body's base).
+        let image = |i: i64, d: usize| -> i8 {
+            if i < 0 {
+                -1
+            } else if i >= dims[d] as i64 {
+                1
+            } else {
+                0
+            }
+        };
+        let partial = field.fill_slabs(motions, |z, push| {
             let mut sums: Vec<(usize, Vector, Vector)> = Vec::new();
-            for &(i, k) in &by_slab[z] {
-                let b = &placed[i];
+            for &(body, k) in &by_slab[z] {
+                let b = &placed[body];
                 let (v0, w0, c0) = b.previous;
                 let (mut cf, mut cm) = (Vector::ZERO, Vector::ZERO);
                 // The row's first node wrapped once; the rest at most once more (a range spans
@@ -335,6 +360,7 @@ impl Fluid {
                 let (lo, x_lo) = (b.ranges[0].0, wrap(b.ranges[0].0, 0));
                 for j in b.ranges[1].0..=b.ranges[1].1 {
                     let y = wrap(j, 1);
+                    let (image_y, image_z) = (image(j - b.base[1], 1), image(k - b.base[2], 2));
                     for i in lo..=b.ranges[0].1 {
                         let p = origin + Vector::new(i as Real, j as Real, k as Real) * dx;
                         let d_b = solid_fraction(b.shape.distance(b.inverse * p), smoothing);
@@ -343,11 +369,11 @@ impl Fluid {
                         if d_b <= 0.0 || walls && lattice.is_solid(lattice.index(x, y, z)) {
                             continue;
                         }
-                        let vel = (b.v + b.w.cross(p - b.com)) * to_lattice;
-                        let arm = (p - b.com) / dx;
-                        push(y, ParticleNode { x: x as u32, d_b, velocity: vel.to_array(), arm: arm.to_array(), id: b.id as u32 });
+                        push(y, ParticleNode::new(x, body, [image(i - b.base[0], 0), image_y, image_z], d_b));
                         // The inner fluid's momentum change, removed from the lattice's force.
                         if inner_fluid {
+                            let vel = (b.v + b.w.cross(p - b.com)) * to_lattice;
+                            let arm = (p - b.com) / dx;
                             let before = (v0 + w0.cross(p - c0)) * to_lattice;
                             let dm = (vel - before) * d_b;
                             cf += dm;
@@ -360,6 +386,7 @@ impl Fluid {
             sums
         });
         self.lattice.particles = field;
+        let partial = partial?;
         let mut corrections = vec![(Vector::ZERO, Vector::ZERO); self.bodies.len()];
         for (id, cf, cm) in partial.into_iter().flatten() {
             corrections[id].0 += cf;

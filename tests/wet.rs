@@ -131,9 +131,12 @@ fn fluid_refuses_bad_input_by_name() {
 
 /// The field the mapping writes (each body over its own index box, wrapped across periodic
 /// faces, rows sorted only when bodies interleave, walls looked up only where there are any)
-/// is the SDF's `d_B` at every node — against a brute-force evaluation at every node of the
-/// lattice and every periodic image, for a rotated cuboid, a cylinder and a ball, two of them
-/// across a periodic face, in a periodic and in a walled box.
+/// is the SDF's `d_B` at every node, and each node moves with its body — against a
+/// brute-force evaluation at every node of the lattice and every periodic image, for a
+/// rotated cuboid, a cylinder and a ball, moving and spinning, two of them across a periodic
+/// face and one three box lengths outside it (a periodic box leaves it there when no contacts
+/// wrap it), in a periodic and in a walled box: `d_B`, the body, and the node's lever arm and
+/// velocity `v + ω × (node − centre)` on the body's side of the face.
 #[test]
 fn the_mapped_field_is_every_nodes_solid_fraction() {
     use discrete_contact::hlbm::solid_fraction;
@@ -147,15 +150,19 @@ fn the_mapped_field_is_every_nodes_solid_fraction() {
         let bodies = [
             (ColliderBuilder::cuboid(3.1e-3, 2.2e-3, 4.3e-3), Vector::new(6.3e-3, 7.7e-3, 8.1e-3), rotation),
             (ColliderBuilder::cylinder(2.6e-3, 3.4e-3), Vector::new(if periodic[0] { 0.9e-3 } else { 18.2e-3 }, 12.4e-3, 13.6e-3), rotation.inverse()),
-            (ColliderBuilder::ball(3.7e-3), Vector::new(17.5e-3, 3.6e-3, 5.5e-3), Rotation::IDENTITY),
+            (ColliderBuilder::ball(3.7e-3), Vector::new(if periodic[0] { 89.5e-3 } else { 17.5e-3 }, 3.6e-3, 5.5e-3), Rotation::IDENTITY),
         ];
         let mut shapes = Vec::new();
-        for (builder, at, rot) in bodies {
-            let body = world.insert_body(RigidBodyBuilder::dynamic().translation(at).rotation(rot.to_scaled_axis()));
+        for (k, (builder, at, rot)) in bodies.into_iter().enumerate() {
+            let (v, w) = (Vector::new(0.01, -0.02, 0.015) * (k + 1) as Real, Vector::new(3.0, -1.0, 2.0) * (k as Real - 1.0));
+            let body = world.insert_body(RigidBodyBuilder::dynamic().translation(at).rotation(rot.to_scaled_axis()).linvel(v).angvel(w));
             let collider = world.insert_collider(builder.density(2000.0), Some(body));
             fluid.couple(&world, collider).unwrap();
             shapes.push((ConvexShape::from_parry(world.colliders[collider].shape()).unwrap(), *world.colliders[collider].position()));
         }
+        // Each body's motion when it is mapped (the step then moves it).
+        let motions: Vec<(Vector, Vector, Vector)> = world.bodies.iter().map(|(_, rb)| (rb.center_of_mass(), rb.linvel(), rb.angvel())).collect();
+        let to_lattice = fluid.units().velocity_to_lattice(1.0);
         fluid.step(&mut world, None).unwrap();
         let lattice = fluid.lattice();
         let [nx, ny, nz] = lattice.dims();
@@ -171,21 +178,28 @@ fn the_mapped_field_is_every_nodes_solid_fraction() {
                     // Every body at every periodic image; at most one reaches a node here.
                     let mut expected = None;
                     for (id, (shape, pose)) in shapes.iter().enumerate() {
-                        let images = |d: usize| if periodic[d] { vec![-1.0, 0.0, 1.0] } else { vec![0.0] };
+                        let images = |d: usize| if periodic[d] { vec![-1.0, 0.0, 1.0, 3.0] } else { vec![0.0] };
                         for shift in images(0).into_iter().flat_map(|sx| images(1).into_iter().map(move |sy| Vector::new(sx, sy, 0.0) * lengths)) {
                             let d_b = solid_fraction(shape.distance(pose.inverse() * (p + shift)), 1.5 * dx);
                             if d_b > 0.0 && !lattice.is_solid(lattice.index(x, y, z)) {
                                 assert!(expected.is_none(), "two bodies reach node ({x}, {y}, {z})");
-                                expected = Some((id as u32, d_b));
+                                let (com, v, w) = motions[id];
+                                let arm = (p + shift - com) / dx;
+                                expected = Some((id as u32, d_b, arm, (v + w.cross(arm * dx)) * to_lattice));
                             }
                         }
                     }
-                    let mapped = row.iter().find(|n| n.x as usize == x).map(|n| (n.id, n.d_b));
+                    let mapped = row.iter().find(|n| n.x as usize == x).map(|n| {
+                        let (body, arm, velocity) = lattice.particles.motion(n, y, z);
+                        (body.id, n.d_b, Vector::from_array(arm), Vector::from_array(velocity))
+                    });
                     match (mapped, expected) {
                         (None, None) => {}
-                        (Some((id, got)), Some((want_id, want))) => {
+                        (Some((id, got, arm, velocity)), Some((want_id, want, want_arm, want_velocity))) => {
                             assert_eq!(id, want_id, "node ({x}, {y}, {z})");
                             assert!((got - want).abs() < 1e-9, "node ({x}, {y}, {z}): d_B {got} vs {want}");
+                            assert!((arm - want_arm).length() < 1e-9, "node ({x}, {y}, {z}): lever arm {arm} vs {want_arm}");
+                            assert!((velocity - want_velocity).length() < 1e-12, "node ({x}, {y}, {z}): velocity {velocity} vs {want_velocity}");
                             checked += 1;
                         }
                         _ => panic!("node ({x}, {y}, {z}): mapped {mapped:?}, expected {expected:?}"),

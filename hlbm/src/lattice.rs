@@ -36,8 +36,9 @@ pub type NodeKind = u8;
 pub struct ParticleForce {
     /// Momentum per step the particle received.
     pub force: [f64; 3],
-    /// The moment about the particle's centre of mass: Σ over its nodes of the node's
-    /// [`ParticleNode::arm`](crate::ParticleNode::arm) × the node's share of the force.
+    /// The moment about the particle's centre of mass: Σ over its nodes of the node's lever
+    /// arm ([`ParticleField::motion`](crate::ParticleField::motion)) × the node's share of the
+    /// force.
     pub moment: [f64; 3],
 }
 
@@ -681,8 +682,8 @@ impl Lattice {
                 return Err(Error::Unstable { step, x, y, z, velocity: u });
             }
             max_u2 = max_u2.max(s.max_u2);
-            for (id, pf) in s.forces {
-                let e = report.particle_forces.entry(id).or_default();
+            for (body, pf) in s.forces {
+                let e = report.particle_forces.entry(self.particles.bodies()[body as usize].id).or_default();
                 for d in 0..3 {
                     e.force[d] += pf.force[d];
                     e.moment[d] += pf.moment[d];
@@ -749,7 +750,7 @@ impl Lattice {
                 for n in particles.row(z * ny + y) {
                     let o = &mut slab[y * nx + n.x as usize];
                     if *o != WALL_OWNER {
-                        *o = n.id + 1;
+                        *o = n.body() as u32 + 1;
                     }
                     row.push(n.x);
                 }
@@ -982,11 +983,12 @@ impl Lattice {
                     let p = &prow[pnext];
                     let l = p.x as usize - x0;
                     b.d_b[l] = p.d_b;
+                    let (_, arm, velocity) = self.particles.motion(p, y, z);
                     for d in 0..3 {
-                        b.velocity[d][l] = p.velocity[d];
-                        b.arm[d][l] = p.arm[d];
+                        b.velocity[d][l] = velocity[d];
+                        b.arm[d][l] = arm[d];
                     }
-                    b.id[l] = p.id;
+                    b.id[l] = p.body() as u32;
                     if exchange {
                         b.links[l] = lrow[pnext];
                     }
@@ -1222,7 +1224,8 @@ struct ParticleBlock {
     d_b: [f64; LANES],
     velocity: [[f64; LANES]; 3],
     arm: [[f64; LANES]; 3],
-    /// Particle id per lane, `u32::MAX` where no particle covers the node.
+    /// Body index per lane ([`ParticleNode::body`](crate::ParticleNode::body)), `u32::MAX`
+    /// where no particle covers the node.
     id: [u32; LANES],
     /// Links leaving the particle, per lane ([`ForceMethod::MomentumExchange`] only).
     links: [u32; LANES],
@@ -1374,7 +1377,10 @@ mod tests {
         for (x, y) in (0..16).flat_map(|x| (0..12).map(move |y| (x, y))) {
             lat.set_solid(x, y, 0, 1);
         }
-        let add = |lat: &mut Lattice, x, y, z, id| lat.particles.add(x, y, z, 1.0, [0.0; 3], [0.0; 3], id);
+        for id in 0..4 {
+            lat.particles.add_body(id, [8.0, 6.0, 2.0], [0.0; 3], [0.0; 3]).unwrap();
+        }
+        let add = |lat: &mut Lattice, x: i64, y: i64, z: i64, body: usize| lat.particles.add(body, [x, y, z], 1.0).unwrap();
         for (x, y, z) in (7..9).flat_map(|x| (5..7).flat_map(move |y| (1..3).map(move |z| (x, y, z)))) {
             add(&mut lat, x, y, z, 0);
         }
@@ -1383,7 +1389,7 @@ mod tests {
         add(&mut lat, 15, 3, 1, 2);
         add(&mut lat, 15, 8, 2, 3);
         let check = |lat: &Lattice| {
-            let owner = |c: usize| (0..lat.particles.rows()).flat_map(|r| lat.particles.row(r).iter().map(move |n| (r * lat.nx + n.x as usize, n.id))).find(|&(at, _)| at == c).map(|(_, id)| id);
+            let owner = |c: usize| (0..lat.particles.rows()).flat_map(|r| lat.particles.row(r).iter().map(move |n| (r * lat.nx + n.x as usize, n.body()))).find(|&(at, _)| at == c).map(|(_, body)| body);
             let mut links = 0;
             for (z, y) in (0..lat.nz).flat_map(|z| (0..lat.ny).map(move |y| (z, y))) {
                 let row = z * lat.ny + y;
@@ -1392,11 +1398,11 @@ mod tests {
                     let mut expected = 0u32;
                     for (i, &c) in C.iter().enumerate().skip(1) {
                         let to = lat.neighbour(x, y, z, c, 1);
-                        if !lat.is_solid(to) && owner(to) != Some(n.id) {
+                        if !lat.is_solid(to) && owner(to) != Some(n.body()) {
                             expected |= 1 << i;
                         }
                     }
-                    assert_eq!(lat.links[row][k], expected, "node ({x}, {y}, {z}) of particle {}", n.id);
+                    assert_eq!(lat.links[row][k], expected, "node ({x}, {y}, {z}) of particle {}", n.body());
                     links += expected.count_ones();
                 }
             }

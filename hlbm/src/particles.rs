@@ -3,30 +3,85 @@
 
 use crate::error::{Error, Result};
 
-/// One node covered by a particle.
+/// One node covered by a particle: 16 bytes. The particle's rigid motion is stored once, in
+/// the field's [`ParticleBody`] table; the node keeps which body it belongs to and on which
+/// periodic image of the lattice that body sees it (so a body straddling a periodic face gets
+/// the right lever arm on both sides).
+///
+/// (It held the node's velocity and lever arm itself, 64 bytes, until the mapping's writes and
+/// the sweep's and the links' reads of them were a quarter of a dense suspension's memory
+/// traffic.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ParticleNode {
     /// `x` index of the node in its row.
     pub x: u32,
+    /// The body's index in the field's table (low 26 bits) and the image (2 bits per axis).
+    body: u32,
     /// Solid fraction `d_B` in `(0, 1]`.
     pub d_b: f64,
-    /// Particle velocity at the node, `v + ω × (x - x_cm)` (lattice units).
-    pub velocity: [f64; 3],
-    /// Lever arm: the node's position minus the particle's centre of mass (lattice units),
-    /// taken on the particle's side of a periodic face, so the moment is right for a particle
-    /// that straddles one.
-    pub arm: [f64; 3],
-    /// Particle id (reported back with its force), below `u32::MAX - 1` (the two largest
-    /// values mark "no particle" and walls inside the lattice).
-    pub id: u32,
 }
 
-/// Particle nodes of every row, sorted by `x`.
+/// Bits of [`ParticleNode`]'s body index; the six above hold the periodic image.
+const BODY_BITS: u32 = 26;
+/// Most bodies a field holds.
+pub const MAX_BODIES: usize = 1 << BODY_BITS;
+
+impl ParticleNode {
+    /// Node `x` of its row, covered by body `body` (an index into the field's body table, below
+    /// [`MAX_BODIES`]) with solid fraction `d_b`; `image` (each −1, 0 or 1) is the periodic
+    /// image on which the body sees the node: its unwrapped position is `(x, y, z) + image ×
+    /// (nx, ny, nz)`.
+    #[inline]
+    pub fn new(x: usize, body: usize, image: [i8; 3], d_b: f64) -> Self {
+        debug_assert!(body < MAX_BODIES && image.iter().all(|i| (-1..=1).contains(i)));
+        let bits = image.iter().enumerate().fold(0u32, |acc, (d, &i)| acc | (((i + 1) as u32) << (2 * d)));
+        Self { x: x as u32, body: body as u32 | bits << BODY_BITS, d_b }
+    }
+
+    /// The index of the node's body in [`ParticleField::bodies`].
+    #[inline]
+    pub fn body(&self) -> usize {
+        (self.body & (MAX_BODIES as u32 - 1)) as usize
+    }
+
+    /// The periodic image on which the body sees the node (each −1, 0 or 1).
+    #[inline]
+    pub fn image(&self) -> [i8; 3] {
+        [0, 1, 2].map(|d| ((self.body >> (BODY_BITS + 2 * d)) & 3) as i8 - 1)
+    }
+}
+
+/// A particle's rigid motion, in lattice units: the velocity of a node it covers is
+/// `velocity + spin × (node − centre)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ParticleBody {
+    /// Id reported back with the particle's force; any value, one body per id.
+    pub id: u32,
+    /// Centre of mass, in node coordinates (node `(i, j, k)` lies at `(i, j, k)`).
+    pub centre: [f64; 3],
+    /// Velocity of the centre of mass (lattice units).
+    pub velocity: [f64; 3],
+    /// Angular velocity (radians per time step).
+    pub spin: [f64; 3],
+}
+
+impl ParticleBody {
+    /// Velocity at lever arm `arm` (node − centre): `velocity + spin × arm`.
+    #[inline(always)]
+    pub fn velocity_at(&self, arm: [f64; 3]) -> [f64; 3] {
+        let (w, v) = (self.spin, self.velocity);
+        [v[0] + w[1] * arm[2] - w[2] * arm[1], v[1] + w[2] * arm[0] - w[0] * arm[2], v[2] + w[0] * arm[1] - w[1] * arm[0]]
+    }
+}
+
+/// Particle nodes of every row, sorted by `x`, and the bodies they belong to.
 #[derive(Clone, Debug, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ParticleField {
     rows: Vec<Vec<ParticleNode>>,
+    bodies: Vec<ParticleBody>,
     nx: usize,
     ny: usize,
     count: usize,
@@ -35,35 +90,67 @@ pub struct ParticleField {
 impl ParticleField {
     /// An empty field for an `nx × ny × nz` lattice.
     pub fn new(nx: usize, ny: usize, nz: usize) -> Self {
-        Self { rows: vec![Vec::new(); ny * nz], nx, ny, count: 0 }
+        Self { rows: vec![Vec::new(); ny * nz], bodies: Vec::new(), nx, ny, count: 0 }
     }
 
-    /// Removes every particle node (keeps the memory).
+    /// Removes every particle node and body (keeps the memory).
     pub fn clear(&mut self) {
         for r in &mut self.rows {
             r.clear();
         }
+        self.bodies.clear();
         self.count = 0;
     }
 
-    /// Adds (or, for two particles on one node, superposes) node `(x, y, z)` of particle `id`
-    /// with solid fraction `d_b`, particle velocity `velocity` there and lever arm `arm` (node
-    /// minus centre of mass), all in lattice units.
+    /// Adds a body with id `id`, centre of mass `centre` (node coordinates; anywhere),
+    /// `velocity` and `spin` (lattice units); returns its index for [`add`](Self::add).
+    /// Refuses non-finite values and more than [`MAX_BODIES`] bodies, naming the parameter.
+    pub fn add_body(&mut self, id: u32, centre: [f64; 3], velocity: [f64; 3], spin: [f64; 3]) -> Result<usize> {
+        let bad = |name, value, allowed| Err(Error::InvalidParameter { name, value, allowed });
+        for (name, v) in [("centre", centre), ("velocity", velocity), ("spin", spin)] {
+            if let Some(&c) = v.iter().find(|c| !c.is_finite()) {
+                return bad(name, c, "finite components");
+            }
+        }
+        if self.bodies.len() >= MAX_BODIES {
+            return bad("bodies", self.bodies.len() as f64, "at most hlbm::particles::MAX_BODIES bodies in a field");
+        }
+        self.bodies.push(ParticleBody { id, centre, velocity, spin });
+        Ok(self.bodies.len() - 1)
+    }
+
+    /// Covers node `node` — unwrapped node coordinates, within one lattice length of the
+    /// lattice on every axis — by body `body` (from [`add_body`](Self::add_body)) with solid
+    /// fraction `d_b > 0`. The node is wrapped into the lattice; its lever arm stays
+    /// `node − centre`.
     ///
-    /// Nodes must be added with `d_b > 0`; a node already covered keeps the larger `d_B` and the
-    /// `d_B`-weighted velocity, and reports its force to the particle with the larger `d_B`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn add(&mut self, x: usize, y: usize, z: usize, d_b: f64, velocity: [f64; 3], arm: [f64; 3], id: u32) {
-        debug_assert!(x < self.nx);
-        let row = &mut self.rows[z * self.ny + y];
-        let node = ParticleNode { x: x as u32, d_b, velocity, arm, id };
-        match row.binary_search_by_key(&(x as u32), |n| n.x) {
-            Ok(i) => superpose(&mut row[i], &node),
+    /// A node already covered keeps the larger `d_B` with its body (velocity, lever arm and
+    /// force).
+    pub fn add(&mut self, body: usize, node: [i64; 3], d_b: f64) -> Result<()> {
+        let dims = [self.nx, self.ny, self.rows.len() / self.ny.max(1)];
+        if body >= self.bodies.len() {
+            return Err(Error::InvalidParameter { name: "body", value: body as f64, allowed: "an index returned by add_body" });
+        }
+        let mut at = [0usize; 3];
+        let mut image = [0i8; 3];
+        for d in 0..3 {
+            let n = dims[d] as i64;
+            if !(-n..2 * n).contains(&node[d]) {
+                return Err(Error::InvalidParameter { name: "node", value: node[d] as f64, allowed: "-n <= coordinate < 2n (within one lattice length)" });
+            }
+            image[d] = node[d].div_euclid(n) as i8;
+            at[d] = node[d].rem_euclid(n) as usize;
+        }
+        let row = &mut self.rows[at[2] * self.ny + at[1]];
+        let new = ParticleNode::new(at[0], body, image, d_b);
+        match row.binary_search_by_key(&(at[0] as u32), |n| n.x) {
+            Ok(i) => superpose(&mut row[i], &new),
             Err(i) => {
-                row.insert(i, node);
+                row.insert(i, new);
                 self.count += 1;
             }
         }
+        Ok(())
     }
 
     /// Adds a sphere of `radius` about `centre` with smoothing width `smoothing`, translating
@@ -94,15 +181,17 @@ impl ParticleField {
         if dims.iter().any(|&n| 2.0 * reach >= n as f64) {
             return bad("radius", radius, "2 (radius + smoothing/2) below every lattice dimension");
         }
+        // The centre wrapped into the lattice: the nodes then lie within one length of it.
+        let centre = [0, 1, 2].map(|d| centre[d].rem_euclid(dims[d] as f64));
+        let body = self.add_body(id, centre, velocity, [0.0; 3])?;
         let (lo, hi) = (centre.map(|c| (c - reach).floor() as i64), centre.map(|c| (c + reach).ceil() as i64));
-        let wrap = |i: i64, d: usize| i.rem_euclid(dims[d] as i64) as usize;
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 for x in lo[0]..=hi[0] {
                     let arm = [x as f64 - centre[0], y as f64 - centre[1], z as f64 - centre[2]];
                     let d_b = solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - radius, smoothing);
                     if d_b > 0.0 {
-                        self.add(wrap(x, 0), wrap(y, 1), wrap(z, 2), d_b, velocity, arm, id);
+                        self.add(body, [x, y, z], d_b)?;
                     }
                 }
             }
@@ -110,13 +199,21 @@ impl ParticleField {
         Ok(())
     }
 
-    /// Refills the whole field slab by slab, on all cores: `fill(z, push)` calls
-    /// `push(y, node)` for the nodes of slab `z`, in any order; every row is then sorted by `x`,
-    /// and nodes pushed twice are superposed as [`add`](Self::add) does, in the order pushed —
-    /// so the field does not depend on the thread count. Returns what each `fill` returned, in
-    /// slab order.
-    pub fn fill_slabs<R: Send>(&mut self, fill: impl Fn(usize, &mut dyn FnMut(usize, ParticleNode)) -> R + Sync) -> Vec<R> {
+    /// Refills the whole field slab by slab, on all cores, with the bodies `bodies` (their
+    /// indices are the nodes' [`ParticleNode::body`]): `fill(z, push)` calls `push(y, node)`
+    /// for the nodes of slab `z`, in any order; every row is then sorted by `x`, and nodes
+    /// pushed twice are superposed as [`add`](Self::add) does, in the order pushed — so the
+    /// field does not depend on the thread count. Returns what each `fill` returned, in slab
+    /// order.
+    ///
+    /// Refuses, naming it, a body with a non-finite centre, velocity or spin, and more than
+    /// [`MAX_BODIES`] bodies (the field is left empty).
+    pub fn fill_slabs<R: Send>(&mut self, bodies: Vec<ParticleBody>, fill: impl Fn(usize, &mut dyn FnMut(usize, ParticleNode)) -> R + Sync) -> Result<Vec<R>> {
         use rayon::prelude::*;
+        self.clear();
+        for b in &bodies {
+            self.add_body(b.id, b.centre, b.velocity, b.spin)?;
+        }
         let ny = self.ny;
         let results: Vec<(R, usize)> = self
             .rows
@@ -143,12 +240,29 @@ impl ParticleField {
             })
             .collect();
         self.count = results.iter().map(|r| r.1).sum();
-        results.into_iter().map(|r| r.0).collect()
+        Ok(results.into_iter().map(|r| r.0).collect())
     }
 
     /// The nodes of row `row = z * ny + y`, sorted by `x`.
     pub fn row(&self, row: usize) -> &[ParticleNode] {
         &self.rows[row]
+    }
+
+    /// The bodies, indexed by [`ParticleNode::body`].
+    pub fn bodies(&self) -> &[ParticleBody] {
+        &self.bodies
+    }
+
+    /// The body covering `node` of row `(y, z)`, the node's lever arm (node − centre, on the
+    /// body's side of a periodic face) and its velocity there (lattice units).
+    #[inline(always)]
+    pub fn motion(&self, node: &ParticleNode, y: usize, z: usize) -> (&ParticleBody, [f64; 3], [f64; 3]) {
+        let b = &self.bodies[node.body()];
+        let image = node.image();
+        let dims = [self.nx, self.ny, self.rows.len() / self.ny];
+        let at = [node.x as usize, y, z];
+        let arm = [0, 1, 2].map(|d| (at[d] as i64 + image[d] as i64 * dims[d] as i64) as f64 - b.centre[d]);
+        (b, arm, b.velocity_at(arm))
     }
 
     /// Number of rows (`ny * nz`).
@@ -167,13 +281,13 @@ impl ParticleField {
     }
 }
 
-/// Two particles on one node: the larger `d_B` is kept with its particle's id and lever arm
-/// (the force goes to that particle), the velocity is the `d_B`-weighted mean.
+/// Two particles on one node: the larger `d_B` is kept with its body — the node moves with
+/// that particle and its force goes to it. (With a node's velocity stored per node it was the
+/// `d_B`-weighted mean of both; nodes are shared only where two smoothing bands overlap, in a
+/// contact.)
 fn superpose(kept: &mut ParticleNode, later: &ParticleNode) {
-    let w = kept.d_b + later.d_b;
-    kept.velocity = [0, 1, 2].map(|d| (kept.velocity[d] * kept.d_b + later.velocity[d] * later.d_b) / w);
     if later.d_b > kept.d_b {
-        (kept.d_b, kept.arm, kept.id) = (later.d_b, later.arm, later.id);
+        *kept = ParticleNode { x: kept.x, ..*later };
     }
 }
 

@@ -305,13 +305,14 @@ fn a_particle_at_rest_against_a_wall_feels_no_force() {
         lat.set_force_method(method);
         // Centre 3 cells above the wall's surface (z = 0.5): radius 4 reaches 1 cell into it.
         let c = [6.7, 7.2, 3.5];
+        let body = lat.particles.add_body(3, c, [0.0; 3], [0.0; 3]).unwrap();
         for z in 1..n - 1 {
             for y in 0..n {
                 for x in 0..n {
                     let arm = [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]];
                     let d_b = hlbm::solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0, 1.0);
                     if d_b > 0.0 {
-                        lat.particles.add(x, y, z, d_b, [0.0; 3], arm, 3);
+                        lat.particles.add(body, [x, y, z].map(|i| i as i64), d_b).unwrap();
                     }
                 }
             }
@@ -352,7 +353,8 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
                     if d_b > 0.0 {
                         expected += 1;
                         let n = found.unwrap_or_else(|| panic!("node ({x}, {y}, {z}) missing"));
-                        assert!((n.d_b - d_b).abs() < 1e-12 && (0..3).all(|d| (n.arm[d] - arm[d]).abs() < 1e-12), "node ({x}, {y}, {z})");
+                        let (_, lever, _) = lat.particles.motion(n, y, z);
+                        assert!((n.d_b - d_b).abs() < 1e-12 && (0..3).all(|d| (lever[d] - arm[d]).abs() < 1e-12), "node ({x}, {y}, {z})");
                     } else {
                         assert!(found.is_none(), "node ({x}, {y}, {z}) covered");
                     }
