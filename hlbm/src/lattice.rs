@@ -82,7 +82,7 @@ pub struct ParticleForce {
 ///   Cost: finding the links takes a pass over the particle nodes and their 18 neighbours per
 ///   step. With 18 % of a 128³ lattice covered by spheres of radius 4 (2 threads,
 ///   `lbm_throughput`): plain fluid 137–147 MLUPs; forcing and momentum exchange at about
-///   0.85 and 0.66 of it — a covered node costs 1.8× and 3.8× a fluid node.
+///   0.85 and 0.7 of it — a covered node costs ~1.9× and 3.2–3.8× a fluid node.
 ///   (Finding the links inside the sweep, block by block, measured slower: 33 against 38
 ///   MLUPs on one thread.)
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -759,7 +759,7 @@ impl Lattice {
         let mut links = std::mem::take(&mut self.links);
         links.resize(self.particles.rows(), Vec::new());
         // The rows' node positions from the compact list just built (the particle nodes
-        // themselves are 64 B apart: reading them again measured a third of this pass).
+        // were 64 B apart then: reading them again measured a third of this pass).
         let xs = &set;
         links.par_chunks_mut(ny).enumerate().for_each(|(z, slab)| {
             let mut span = vec![0u32; nx];
@@ -1248,6 +1248,7 @@ struct ParticleBlock {
 /// Per direction a masked vector update over the block, where a lane-by-lane walk over each
 /// node's link bits mispredicts a branch per link.
 #[inline(always)]
+#[allow(clippy::neg_multiply)] // the velocity components are the macro's constants, ±1
 fn exchange_half<const INCOMING: bool>(blk: &[[f64; LANES]; Q], links: &[u32; LANES], crossing: &mut [f64; LANES], exchange: &mut [[f64; LANES]; 3]) {
     macro_rules! link {
         ($i:expr, $pop:expr, $cx:expr, $cy:expr, $cz:expr, $w:expr) => {

@@ -1,5 +1,6 @@
 //! The per-node particle field of HLBM: which nodes a particle covers, how much (`d_B`), and
-//! the particle's velocity there. Stored per row and sparse, so fluid-only rows pay nothing.
+//! the particle's velocity there — from its rigid motion, stored once per particle
+//! ([`ParticleBody`]). Stored per row and sparse, so fluid-only rows pay nothing.
 
 use crate::error::{Error, Result};
 
