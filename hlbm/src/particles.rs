@@ -122,8 +122,8 @@ impl ParticleField {
 
     /// Covers node `node` — unwrapped node coordinates, within one lattice length of the
     /// lattice on every axis — by body `body` (from [`add_body`](Self::add_body)) with solid
-    /// fraction `d_b > 0`. The node is wrapped into the lattice; its lever arm stays
-    /// `node − centre`.
+    /// fraction `0 < d_b <= 1`. The node is wrapped into the lattice; its lever arm stays
+    /// `node − centre`. Refuses, naming it, a parameter out of these ranges.
     ///
     /// A node already covered keeps the larger `d_B` with its body (velocity, lever arm and
     /// force).
@@ -131,6 +131,9 @@ impl ParticleField {
         let dims = [self.nx, self.ny, self.rows.len() / self.ny.max(1)];
         if body >= self.bodies.len() {
             return Err(Error::InvalidParameter { name: "body", value: body as f64, allowed: "an index returned by add_body" });
+        }
+        if !(d_b > 0.0 && d_b <= 1.0) {
+            return Err(Error::InvalidParameter { name: "d_b", value: d_b, allowed: "0 < d_b <= 1" });
         }
         let mut at = [0usize; 3];
         let mut image = [0i8; 3];

@@ -326,8 +326,9 @@ fn a_particle_at_rest_against_a_wall_feels_no_force() {
 
 /// `ParticleField::add_sphere` covers exactly the nodes a brute-force sweep of the whole
 /// lattice finds (`solid_fraction` of the distance to the nearest periodic image of the
-/// centre), with the same `d_B`, wherever the centre lies — across the periodic corner too —
-/// and refuses bad input by name.
+/// centre), with the same `d_B` and lever arm, wherever the centre lies — across the periodic
+/// corner too — and refuses bad input by name; so do `add_body` and `add`, and a node two
+/// bodies share keeps the larger `d_B`'s body whole.
 #[test]
 fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
     let name = |e: Error| match e {
@@ -370,6 +371,22 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
     assert_eq!(name(field.add_sphere([1.0, f64::INFINITY, 1.0], 2.0, 1.0, [0.0; 3], 0).unwrap_err()), "centre");
     assert_eq!(name(field.add_sphere([1.0; 3], 2.0, 1.0, [0.0, f64::NAN, 0.0], 0).unwrap_err()), "velocity");
     assert!(field.is_empty());
+    // Single nodes: a body from `add_body`, `0 < d_b <= 1`, within one lattice length.
+    assert_eq!(name(field.add_body(0, [1.0; 3], [0.0; 3], [0.0, f64::INFINITY, 0.0]).unwrap_err()), "spin");
+    assert_eq!(name(field.add(0, [1, 1, 1], 0.5).unwrap_err()), "body");
+    let (a, b) = (field.add_body(10, [1.0; 3], [0.1, 0.0, 0.0], [0.0; 3]).unwrap(), field.add_body(11, [15.0, 1.0, 1.0], [0.0, 0.2, 0.0], [0.0; 3]).unwrap());
+    assert_eq!(name(field.add(a, [1, 1, 1], 0.0).unwrap_err()), "d_b");
+    assert_eq!(name(field.add(a, [1, 1, 1], 1.5).unwrap_err()), "d_b");
+    assert_eq!(name(field.add(a, [1, 1, 24], 0.5).unwrap_err()), "node");
+    assert!(field.is_empty());
+    // One node twice: the larger d_B keeps its body whole (velocity and, across the x face,
+    // the lever arm on that body's side).
+    field.add(a, [0, 1, 1], 0.4).unwrap();
+    field.add(b, [16, 1, 1], 0.7).unwrap();
+    assert_eq!(field.len(), 1);
+    let node = field.row(14 + 1)[0];
+    let (body, arm, velocity) = field.motion(&node, 1, 1);
+    assert_eq!((node.x, node.d_b, body.id, arm, velocity), (0, 0.7, 11, [1.0, 0.0, 0.0], [0.0, 0.2, 0.0]));
 }
 
 /// The solid fraction falls monotonically from 1 to 0 across the smoothing band, is ½ on the
