@@ -5,8 +5,9 @@
 //! runs. One [`Fluid::step`] is seed 000's Algorithm 2:
 //!
 //! 1. every coupled body is written onto the lattice from its SDF: the solid fraction
-//!    `d_B = cos²(π/2 (d/ε + 1/2))` in the smoothing band of width `ε`, 1 inside, and the body's
-//!    velocity `v + ω × (x − x_cm)` at each node it covers (solid wall nodes excepted);
+//!    `d_B = cos²(π/2 (d/ε + 1/2))` in the smoothing band of width `ε`, 1 inside, at each node
+//!    it covers (solid wall nodes excepted), and its rigid motion once (the lattice takes the
+//!    velocity `v + ω × (x − x_cm)` at a node from it);
 //! 2. one lattice step with EDM forcing returns each body's hydrodynamic force and moment;
 //! 3. that force, with buoyancy `−ρ_f V g`, is held on the body while rapier integrates one
 //!    fluid step `Δt` — with contact sub-steps when a [`DiscreteContacts`] is given (the

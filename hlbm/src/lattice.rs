@@ -869,9 +869,9 @@ impl Lattice {
         };
         let lim2 = self.velocity_limit * self.velocity_limit;
         let mut pnext = 0usize;
-        // Reused by every block with particle nodes (only its `id`, `d_b`, `links` and `exchange`
-        // are reset; lanes without a node keep `d_b = 0` and stale but finite velocities and
-        // arms, which the forcing multiplies by that zero, and the forces skip).
+        // Reused by every block with particle nodes (only its `id`, `d_b`, `links` and the
+        // exchange's sums are reset; lanes without a node keep `d_b = 0` and stale but finite
+        // velocities and arms, which the forcing multiplies by that zero, and the forces skip).
         let mut pb = ParticleBlock {
             d_b: [0.0; LANES],
             velocity: [[0.0; LANES]; 3],
