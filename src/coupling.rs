@@ -324,14 +324,14 @@ impl Fluid {
             slab.sort_by_key(|&(i, _)| (placed[i].ranges[0].0, i));
         }
         // Each body's rigid motion once (lattice units); the nodes name it by its index here.
-        let spin = self.units.dt();
+        let dt = self.units.dt();
         let motions = placed
             .iter()
             .map(|b| ParticleBody {
                 id: b.id as u32,
                 centre: ((b.com - self.origin) / dx - Vector::from_array(b.base.map(|n| n as Real))).to_array(),
                 velocity: (b.v * to_lattice).to_array(),
-                spin: (b.w * spin).to_array(),
+                spin: (b.w * dt).to_array(),
             })
             .collect();
         let mut field = std::mem::take(&mut self.lattice.particles);

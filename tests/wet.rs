@@ -152,16 +152,17 @@ fn the_mapped_field_is_every_nodes_solid_fraction() {
             (ColliderBuilder::cylinder(2.6e-3, 3.4e-3), Vector::new(if periodic[0] { 0.9e-3 } else { 18.2e-3 }, 12.4e-3, 13.6e-3), rotation.inverse()),
             (ColliderBuilder::ball(3.7e-3), Vector::new(if periodic[0] { 89.5e-3 } else { 17.5e-3 }, 3.6e-3, 5.5e-3), Rotation::IDENTITY),
         ];
-        let mut shapes = Vec::new();
+        let (mut shapes, mut handles) = (Vec::new(), Vec::new());
         for (k, (builder, at, rot)) in bodies.into_iter().enumerate() {
             let (v, w) = (Vector::new(0.01, -0.02, 0.015) * (k + 1) as Real, Vector::new(3.0, -1.0, 2.0) * (k as Real - 1.0));
             let body = world.insert_body(RigidBodyBuilder::dynamic().translation(at).rotation(rot.to_scaled_axis()).linvel(v).angvel(w));
             let collider = world.insert_collider(builder.density(2000.0), Some(body));
             fluid.couple(&world, collider).unwrap();
             shapes.push((ConvexShape::from_parry(world.colliders[collider].shape()).unwrap(), *world.colliders[collider].position()));
+            handles.push(body);
         }
-        // Each body's motion when it is mapped (the step then moves it).
-        let motions: Vec<(Vector, Vector, Vector)> = world.bodies.iter().map(|(_, rb)| (rb.center_of_mass(), rb.linvel(), rb.angvel())).collect();
+        // Each body's motion when it is mapped (the step then moves it), in coupling order.
+        let motions: Vec<(Vector, Vector, Vector)> = handles.iter().map(|&h| (world.bodies[h].center_of_mass(), world.bodies[h].linvel(), world.bodies[h].angvel())).collect();
         let to_lattice = fluid.units().velocity_to_lattice(1.0);
         fluid.step(&mut world, None).unwrap();
         let lattice = fluid.lattice();

@@ -297,7 +297,7 @@ pub struct Lattice {
     /// `x + c_i` leaves the particle ([`ForceMethod::MomentumExchange`] only; rebuilt each step).
     #[cfg_attr(feature = "serde", serde(skip))]
     links: Vec<Vec<u32>>,
-    /// [`Lattice::find_links`]'s owner field (particle id + 1 per node, [`WALL_OWNER`] on walls,
+    /// [`Lattice::find_links`]'s owner field (body index + 1 per node, [`WALL_OWNER`] on walls,
     /// 0 elsewhere; empty until first needed and after the walls change) and the `x` of the
     /// nodes it has set, per row (to clear them next step).
     #[cfg_attr(feature = "serde", serde(skip))]
@@ -311,6 +311,7 @@ pub struct Lattice {
 struct SlabResult {
     max_u2: f64,
     bad: Option<(usize, f64)>,
+    /// Per body index (the step reports them by the bodies' ids).
     forces: BTreeMap<u32, ParticleForce>,
 }
 
@@ -719,7 +720,7 @@ impl Lattice {
     /// Marks, for every particle node, the links that leave its particle: to a node that is
     /// fluid (not a wall) and not covered by the same particle.
     ///
-    /// Through a dense owner field (particle id + 1 per node, [`WALL_OWNER`] on walls, 0
+    /// Through a dense owner field (body index + 1 per node, [`WALL_OWNER`] on walls, 0
     /// elsewhere; 4 B per node), updated sparsely — the last step's nodes cleared, this step's
     /// set — slab by slab on all cores; then, per row with particle nodes and per direction,
     /// one pass ([`row_links`]) compares the owners along the row's span of particle nodes
@@ -869,14 +870,14 @@ impl Lattice {
         };
         let lim2 = self.velocity_limit * self.velocity_limit;
         let mut pnext = 0usize;
-        // Reused by every block with particle nodes (only its `id`, `d_b`, `links` and the
+        // Reused by every block with particle nodes (only its `body`, `d_b`, `links` and the
         // exchange's sums are reset; lanes without a node keep `d_b = 0` and stale but finite
         // velocities and arms, which the forcing multiplies by that zero, and the forces skip).
         let mut pb = ParticleBlock {
             d_b: [0.0; LANES],
             velocity: [[0.0; LANES]; 3],
             arm: [[0.0; LANES]; 3],
-            id: [u32::MAX; LANES],
+            body: [u32::MAX; LANES],
             links: [0; LANES],
             linked: false,
             crossing: [0.0; LANES],
@@ -974,7 +975,7 @@ impl Lattice {
             let mut at = None;
             if has_particles {
                 let b = &mut pb;
-                b.id = [u32::MAX; LANES];
+                b.body = [u32::MAX; LANES];
                 b.d_b = [0.0; LANES];
                 b.links = [0; LANES];
                 b.crossing = [0.0; LANES];
@@ -988,7 +989,7 @@ impl Lattice {
                         b.velocity[d][l] = velocity[d];
                         b.arm[d][l] = arm[d];
                     }
-                    b.id[l] = p.body() as u32;
+                    b.body[l] = p.body() as u32;
                     if exchange {
                         b.links[l] = lrow[pnext];
                     }
@@ -1037,7 +1038,7 @@ impl Lattice {
                 }
                 let b = &pb;
                 for l in 0..lanes {
-                    if b.id[l] == u32::MAX {
+                    if b.body[l] == u32::MAX {
                         continue;
                     }
                     let fp = if exchange {
@@ -1047,9 +1048,9 @@ impl Lattice {
                     } else {
                         [0, 1, 2].map(|d| -rho[l] * (du[d][l] - g[d]))
                     };
-                    if b.id[l] != run.0 {
+                    if b.body[l] != run.0 {
                         flush(res, &run);
-                        run = (b.id[l], ParticleForce::default());
+                        run = (b.body[l], ParticleForce::default());
                     }
                     let m = cross([b.arm[0][l], b.arm[1][l], b.arm[2][l]], fp);
                     for d in 0..3 {
@@ -1175,7 +1176,7 @@ fn wrap_step(v: usize, d: i64, n: usize) -> usize {
     }
 }
 
-/// The owner field's mark for a wall node (no particle id + 1 reaches it).
+/// The owner field's mark for a wall node (no body index + 1 reaches it).
 const WALL_OWNER: u32 = u32::MAX;
 
 /// A neighbouring row `(dy, dz)` and the directions `(dx, i)` that point into it.
@@ -1226,7 +1227,7 @@ struct ParticleBlock {
     arm: [[f64; LANES]; 3],
     /// Body index per lane ([`ParticleNode::body`](crate::ParticleNode::body)), `u32::MAX`
     /// where no particle covers the node.
-    id: [u32; LANES],
+    body: [u32; LANES],
     /// Links leaving the particle, per lane ([`ForceMethod::MomentumExchange`] only).
     links: [u32; LANES],
     /// Whether any lane has a link (a block inside a particle has none).

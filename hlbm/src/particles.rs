@@ -85,13 +85,19 @@ pub struct ParticleField {
     bodies: Vec<ParticleBody>,
     nx: usize,
     ny: usize,
+    nz: usize,
     count: usize,
 }
 
 impl ParticleField {
     /// An empty field for an `nx × ny × nz` lattice.
     pub fn new(nx: usize, ny: usize, nz: usize) -> Self {
-        Self { rows: vec![Vec::new(); ny * nz], bodies: Vec::new(), nx, ny, count: 0 }
+        Self { rows: vec![Vec::new(); ny * nz], bodies: Vec::new(), nx, ny, nz, count: 0 }
+    }
+
+    /// The lattice's dimensions `[nx, ny, nz]`.
+    fn dims(&self) -> [usize; 3] {
+        [self.nx, self.ny, self.nz]
     }
 
     /// Removes every particle node and body (keeps the memory).
@@ -128,7 +134,7 @@ impl ParticleField {
     /// A node already covered keeps the larger `d_B` with its body (velocity, lever arm and
     /// force).
     pub fn add(&mut self, body: usize, node: [i64; 3], d_b: f64) -> Result<()> {
-        let dims = [self.nx, self.ny, self.rows.len() / self.ny.max(1)];
+        let dims = self.dims();
         if body >= self.bodies.len() {
             return Err(Error::InvalidParameter { name: "body", value: body as f64, allowed: "an index returned by add_body" });
         }
@@ -168,7 +174,7 @@ impl ParticleField {
     /// smoothing/2)` is not below every dimension of the lattice (it would cover nodes twice).
     pub fn add_sphere(&mut self, centre: [f64; 3], radius: f64, smoothing: f64, velocity: [f64; 3], id: u32) -> Result<()> {
         let bad = |name, value, allowed| Err(Error::InvalidParameter { name, value, allowed });
-        let dims = [self.nx, self.ny, self.rows.len() / self.ny];
+        let dims = self.dims();
         if !(radius > 0.0 && radius.is_finite()) {
             return bad("radius", radius, "0 < radius (finite)");
         }
@@ -263,7 +269,7 @@ impl ParticleField {
     pub fn motion(&self, node: &ParticleNode, y: usize, z: usize) -> (&ParticleBody, [f64; 3], [f64; 3]) {
         let b = &self.bodies[node.body()];
         let image = node.image();
-        let dims = [self.nx, self.ny, self.rows.len() / self.ny];
+        let dims = self.dims();
         let at = [node.x as usize, y, z];
         let arm = [0, 1, 2].map(|d| (at[d] as i64 + image[d] as i64 * dims[d] as i64) as f64 - b.centre[d]);
         (b, arm, b.velocity_at(arm))
