@@ -79,12 +79,13 @@ pub struct ParticleForce {
 ///   6 % velocity jitter (0.2 % without); without them the mean settling speed is 1.8–3 %
 ///   above the forcing measure's (the momentum the moving nodes carry), see the settling tests.
 ///
-///   Cost: finding the links takes a pass over the particle nodes and their 18 neighbours per
-///   step. With 18 % of a 128³ lattice covered by spheres of radius 4 (2 threads,
-///   `lbm_throughput`): plain fluid 137–147 MLUPs; forcing and momentum exchange at about
-///   0.85 and 0.7 of it — a covered node costs ~1.9× and 3.2–3.8× a fluid node.
-///   (Finding the links inside the sweep, block by block, measured slower: 33 against 38
-///   MLUPs on one thread.)
+///   Cost: finding the links takes a pass over the particle nodes of the rows that changed
+///   since the last step and their neighbours. With 18 % of a 128³ lattice covered by spheres
+///   of radius 4 (2 threads, `lbm_throughput`): plain fluid 147–160 MLUPs; forcing at about
+///   0.85 of it, momentum exchange at ~0.78 with the spheres at rest and ~0.69 with every row
+///   changing each step — a covered node costs ~1.9×, ~2.5× and ~3.5× a fluid node. (Finding
+///   the links inside the sweep, block by block, measured slower: 33 against 38 MLUPs on one
+///   thread.)
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ForceMethod {
@@ -294,16 +295,20 @@ pub struct Lattice {
     macros: Option<Macroscopic>,
     force_method: ForceMethod,
     /// Per particle node (rows as in [`ParticleField`]): bit `i` set when the link to
-    /// `x + c_i` leaves the particle ([`ForceMethod::MomentumExchange`] only; rebuilt each step).
+    /// `x + c_i` leaves the particle ([`ForceMethod::MomentumExchange`] only; each step, rows
+    /// whose neighbourhood changed are rebuilt).
     #[cfg_attr(feature = "serde", serde(skip))]
     links: Vec<Vec<u32>>,
     /// [`Lattice::find_links`]'s owner field (body index + 1 per node, [`WALL_OWNER`] on walls,
-    /// 0 elsewhere; empty until first needed and after the walls change) and the `x` of the
-    /// nodes it has set, per row (to clear them next step).
+    /// 0 elsewhere; empty until first needed and after the walls change) and the `(x, body
+    /// index)` of the nodes it has set, per row (to see what changed, and clear it).
     #[cfg_attr(feature = "serde", serde(skip))]
     owner: Vec<u32>,
     #[cfg_attr(feature = "serde", serde(skip))]
-    owned: Vec<Vec<u32>>,
+    owned: Vec<Vec<(u32, u32)>>,
+    /// Per row: whether its nodes changed in the last [`Lattice::find_links`].
+    #[cfg_attr(feature = "serde", serde(skip))]
+    changed: Vec<bool>,
 }
 
 /// Per-slab results, reduced in slab order (deterministic for any thread count).
@@ -353,6 +358,7 @@ impl Lattice {
             links: Vec::new(),
             owner: Vec::new(),
             owned: Vec::new(),
+            changed: Vec::new(),
         })
     }
 
@@ -721,50 +727,67 @@ impl Lattice {
     /// fluid (not a wall) and not covered by the same particle.
     ///
     /// Through a dense owner field (body index + 1 per node, [`WALL_OWNER`] on walls, 0
-    /// elsewhere; 4 B per node), updated sparsely — the last step's nodes cleared, this step's
-    /// set — slab by slab on all cores; then, per row with particle nodes and per direction,
-    /// one pass ([`row_links`]) compares the owners along the row's span of particle nodes
-    /// with those of the neighbouring row it points into. (Walking each row's nine neighbouring
-    /// rows in the sparse field instead measured ~2× slower; doing this block by block inside
-    /// the sweep, slower too.)
+    /// elsewhere; 4 B per node), updated sparsely slab by slab on all cores: a row whose nodes
+    /// (`x` and body) are the last call's is left alone, another has the last call's nodes
+    /// cleared and its own set. Then only the rows next to a changed one (or changed
+    /// themselves) find their links again: per direction, one pass ([`row_links`]) compares
+    /// the owners along the row's span of particle nodes with those of the neighbouring row it
+    /// points into. A body moving a small fraction of a cell per step changes few of its rows
+    /// in a step. (Walking each row's nine neighbouring rows in the sparse field instead
+    /// measured ~2× slower; doing this block by block inside the sweep, slower too; runs of
+    /// one body's nodes per row, with the links found by interval arithmetic at their ends,
+    /// ~2.5× slower for bodies of a few cells, whose runs are short.)
     fn find_links(&mut self) {
         let (nx, ny, nz) = (self.nx, self.ny, self.nz);
         let kind = &self.kind;
+        let rows = self.particles.rows();
         let mut owner = std::mem::take(&mut self.owner);
         let mut set = std::mem::take(&mut self.owned);
+        let mut changed = std::mem::take(&mut self.changed);
         if owner.len() != kind.len() {
+            // (Re)built: every row with nodes differs from the empty list.
             owner = kind.iter().map(|&k| if k != 0 { WALL_OWNER } else { 0 }).collect();
             set.clear();
         }
-        set.resize(self.particles.rows(), Vec::new());
+        set.resize(rows, Vec::new());
+        changed.resize(rows, false);
         let particles = &self.particles;
-        owner.par_chunks_mut(nx * ny).zip(set.par_chunks_mut(ny)).enumerate().for_each(|(z, (slab, rows))| {
-            for (y, row) in rows.iter_mut().enumerate() {
+        owner.par_chunks_mut(nx * ny).zip(set.par_chunks_mut(ny)).zip(changed.par_chunks_mut(ny)).enumerate().for_each(|(z, ((slab, rows), changed))| {
+            for (y, (row, changed)) in rows.iter_mut().zip(changed.iter_mut()).enumerate() {
+                let nodes = particles.row(z * ny + y);
+                *changed = nodes.len() != row.len() || nodes.iter().zip(row.iter()).any(|(n, &(x, body))| n.x != x || n.body() as u32 != body);
+                if !*changed {
+                    continue;
+                }
                 // A wall node stays a wall (a particle covering one is the caller's error).
-                for &x in row.iter() {
+                for &(x, _) in row.iter() {
                     let o = &mut slab[y * nx + x as usize];
                     if *o != WALL_OWNER {
                         *o = 0;
                     }
                 }
                 row.clear();
-                for n in particles.row(z * ny + y) {
+                for n in nodes {
                     let o = &mut slab[y * nx + n.x as usize];
                     if *o != WALL_OWNER {
                         *o = n.body() as u32 + 1;
                     }
-                    row.push(n.x);
+                    row.push((n.x, n.body() as u32));
                 }
             }
         });
         let mut links = std::mem::take(&mut self.links);
-        links.resize(self.particles.rows(), Vec::new());
+        links.resize(rows, Vec::new());
         // The rows' node positions from the compact list just built (the particle nodes
         // were 64 B apart then: reading them again measured a third of this pass).
-        let xs = &set;
+        let (xs, changed_ref) = (&set, &changed);
         links.par_chunks_mut(ny).enumerate().for_each(|(z, slab)| {
             let mut span = vec![0u32; nx];
             for (y, masks) in slab.iter_mut().enumerate() {
+                let near = |dy: i64, dz: i64| changed_ref[wrap_step(z, dz, nz) * ny + wrap_step(y, dy, ny)];
+                if !(-1..=1).any(|dz| (-1..=1).any(|dy| near(dy, dz))) {
+                    continue;
+                }
                 masks.clear();
                 row_links(&owner, &xs[z * ny + y], y, z, [nx, ny, nz], &mut span, masks);
             }
@@ -772,6 +795,7 @@ impl Lattice {
         self.links = links;
         self.owner = owner;
         self.owned = set;
+        self.changed = changed;
     }
 
     /// Runs `steps` steps; stops at the first error.
@@ -1101,18 +1125,19 @@ impl Lattice {
     }
 }
 
-/// Appends to `masks` the links of the particle nodes `nodes` (their `x`, sorted) of row
+/// Appends to `masks` the links of the particle nodes `nodes` (`x` and body index, sorted by
+/// `x`) of row
 /// `(y, z)`, read off the owner field; `span` is scratch of length `nx`. Compiled for the best
 /// instruction set this CPU has (the compares vectorise: measured 4 → 16 lanes).
-fn row_links(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
+fn row_links(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
     #[cfg(target_arch = "x86_64")]
     {
         #[target_feature(enable = "avx512f,avx2")]
-        unsafe fn avx512(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
+        unsafe fn avx512(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
             row_links_generic(owner, nodes, y, z, dims, span, masks)
         }
         #[target_feature(enable = "avx2")]
-        unsafe fn avx2(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
+        unsafe fn avx2(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
             row_links_generic(owner, nodes, y, z, dims, span, masks)
         }
         // SAFETY: the instruction sets were detected on this CPU.
@@ -1129,9 +1154,9 @@ fn row_links(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [usize; 3],
 /// particle nodes, comparing contiguous owners (the first and last node of the row, whose
 /// links can wrap round the x face, one by one).
 #[inline(always)]
-fn row_links_generic(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
+fn row_links_generic(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
     let [nx, ny, nz] = dims;
-    let (Some(&first), Some(&last)) = (nodes.first(), nodes.last()) else { return };
+    let (Some(&(first, _)), Some(&(last, _))) = (nodes.first(), nodes.last()) else { return };
     let own = (z * ny + y) * nx;
     let lo = (first as usize).max(1);
     let hi = (last as usize + 1).min(nx - 1).max(lo);
@@ -1153,7 +1178,7 @@ fn row_links_generic(owner: &[u32], nodes: &[u32], y: usize, z: usize, dims: [us
             }
         }
     }
-    masks.extend(nodes.iter().map(|&x| match x as usize {
+    masks.extend(nodes.iter().map(|&(x, _)| match x as usize {
         0 => ends[0],
         x if x == nx - 1 => ends[1],
         x => span[x],
@@ -1246,40 +1271,52 @@ struct ParticleBlock {
 /// force on the node is then `exchange + u_p crossing`:
 /// `Σ_links [u_p (f_i^out − f_ī^in) − c_i (f_i^out − w_i) − c_i (f_ī^in − w_i)]`.
 ///
-/// Per direction a masked vector update over the block, where a lane-by-lane walk over each
-/// node's link bits mispredicts a branch per link.
+/// Per direction a masked vector select over the block (a lane-by-lane walk over each node's
+/// link bits mispredicts a branch per link), the selected terms then added pairwise
+/// ([`tree_sum`]): accumulated direction after direction, the four sums were chains of 18 and
+/// 10 dependent adds, each waiting on the last.
 #[inline(always)]
-#[allow(clippy::neg_multiply)] // the velocity components are the macro's constants, ±1
 fn exchange_half<const INCOMING: bool>(blk: &[[f64; LANES]; Q], links: &[u32; LANES], crossing: &mut [f64; LANES], exchange: &mut [[f64; LANES]; 3]) {
-    macro_rules! link {
-        ($i:expr, $pop:expr, $cx:expr, $cy:expr, $cz:expr, $w:expr) => {
-            let pop = &blk[$pop];
+    // Per moving direction i: the population crossing where i is a link, else 0; and (the
+    // incoming half only, for both) 2 w_i where i is a link. One select per loop: so each
+    // stays a masked vector move.
+    let mut f = [[0.0; LANES]; Q];
+    let mut w = [[0.0; LANES]; Q];
+    macro_rules! pair {
+        ($i:expr, $j:expr, $cx:expr, $cy:expr, $cz:expr, $w:expr) => {
+            // Direction i reads f_ī = f_j before the collision and f_i after; j the reverse.
+            let (pi, pj) = if INCOMING { (&blk[$j], &blk[$i]) } else { (&blk[$i], &blk[$j]) };
             for l in 0..LANES {
-                let on = (links[l] >> $i) & 1 != 0;
-                let f = if on { pop[l] } else { 0.0 };
-                let s = if on { pop[l] - $w } else { 0.0 };
-                crossing[l] += if INCOMING { -f } else { f };
-                // Constant conditions: only the direction's non-zero components remain.
-                if $cx != 0.0 {
-                    exchange[0][l] -= $cx * s;
+                f[$i][l] = if (links[l] >> $i) & 1 != 0 { pi[l] } else { 0.0 };
+            }
+            for l in 0..LANES {
+                f[$j][l] = if (links[l] >> $j) & 1 != 0 { pj[l] } else { 0.0 };
+            }
+            if INCOMING {
+                for l in 0..LANES {
+                    w[$i][l] = if (links[l] >> $i) & 1 != 0 { 2.0 * $w } else { 0.0 };
                 }
-                if $cy != 0.0 {
-                    exchange[1][l] -= $cy * s;
-                }
-                if $cz != 0.0 {
-                    exchange[2][l] -= $cz * s;
+                for l in 0..LANES {
+                    w[$j][l] = if (links[l] >> $j) & 1 != 0 { 2.0 * $w } else { 0.0 };
                 }
             }
         };
     }
-    macro_rules! pair {
-        ($i:expr, $j:expr, $cx:expr, $cy:expr, $cz:expr, $w:expr) => {
-            // Direction i reads f_ī = f_j before the collision and f_i after; j the reverse.
-            link!($i, if INCOMING { $j } else { $i }, $cx, $cy, $cz, $w);
-            link!($j, if INCOMING { $i } else { $j }, -$cx, -$cy, -$cz, $w);
-        };
-    }
     for_each_pair!(pair);
+    // Added pairwise: direction after direction, the four sums were chains of 18 and 10
+    // dependent adds. With c_i − c_ī per pair (i, ī): pairs 1–9 are x, y, z, (1,1,0), (1,−1,0),
+    // (1,0,1), (1,0,−1), (0,1,1), (0,1,−1).
+    for l in 0..LANES {
+        let g = |i: usize| f[i][l] - w[i][l];
+        let d = |k: usize| g(k) - g(k + 9);
+        let total = (((f[1][l] + f[10][l]) + (f[2][l] + f[11][l])) + ((f[3][l] + f[12][l]) + (f[4][l] + f[13][l])))
+            + (((f[5][l] + f[14][l]) + (f[6][l] + f[15][l])) + ((f[7][l] + f[16][l]) + (f[8][l] + f[17][l])))
+            + (f[9][l] + f[18][l]);
+        crossing[l] += if INCOMING { -total } else { total };
+        exchange[0][l] -= ((d(1) + d(4)) + (d(5) + d(6))) + d(7);
+        exchange[1][l] -= ((d(2) + d(4)) - d(5)) + (d(8) + d(9));
+        exchange[2][l] -= ((d(3) + d(6)) - d(7)) + (d(8) - d(9));
+    }
 }
 
 /// How many blocks ahead the sweep prefetches its 19 read (and, in odd steps, 19 write)
@@ -1372,24 +1409,31 @@ mod tests {
     /// Every link `find_links` marks, and only those, against the definition checked node by
     /// node: from a particle node along `c_i` to a node that is not a wall and not covered by
     /// the same particle — with a wall under the particles, a second particle beside the first,
-    /// nodes on the periodic x faces, and a wall added after the owner field was built.
+    /// nodes on the periodic x faces, a wall added after the owner field was built, and then
+    /// the particles moved (the rows that changed and their neighbours found again, the rest
+    /// kept from the call before).
     #[test]
     fn links_leave_the_particle_to_fluid_and_other_particles_never_into_walls() {
         let mut lat = Lattice::new(16, 12, 10, 0.8).unwrap();
         for (x, y) in (0..16).flat_map(|x| (0..12).map(move |y| (x, y))) {
             lat.set_solid(x, y, 0, 1);
         }
-        for id in 0..4 {
-            lat.particles.add_body(id, [8.0, 6.0, 2.0], [0.0; 3], [0.0; 3]).unwrap();
-        }
-        let add = |lat: &mut Lattice, x: i64, y: i64, z: i64, body: usize| lat.particles.add(body, [x, y, z], 1.0).unwrap();
-        for (x, y, z) in (7..9).flat_map(|x| (5..7).flat_map(move |y| (1..3).map(move |z| (x, y, z)))) {
-            add(&mut lat, x, y, z, 0);
-        }
-        add(&mut lat, 9, 5, 1, 1);
-        add(&mut lat, 0, 3, 1, 2);
-        add(&mut lat, 15, 3, 1, 2);
-        add(&mut lat, 15, 8, 2, 3);
+        // Body 0: a 2 × 2 × 2 cube, shifted by `dx` and grown by `grow` cells along y; the
+        // rest single nodes, some on the x faces.
+        let fill = |lat: &mut Lattice, dx: i64, grow: i64| {
+            lat.particles.clear();
+            for id in 0..4 {
+                lat.particles.add_body(id, [8.0, 6.0, 2.0], [0.0; 3], [0.0; 3]).unwrap();
+            }
+            let mut add = |x: i64, y: i64, z: i64, body: usize| lat.particles.add(body, [x, y, z], 1.0).unwrap();
+            for (x, y, z) in (7..9).flat_map(|x| (5..7 + grow).flat_map(move |y| (1..3).map(move |z| (x, y, z)))) {
+                add(x + dx, y, z, 0);
+            }
+            add(9, 5, 1, 1);
+            add(0, 3, 1, 2);
+            add(15, 3, 1, 2);
+            add(15, 8, 2, 3);
+        };
         let check = |lat: &Lattice| {
             let owner = |c: usize| (0..lat.particles.rows()).flat_map(|r| lat.particles.row(r).iter().map(move |n| (r * lat.nx + n.x as usize, n.body()))).find(|&(at, _)| at == c).map(|(_, body)| body);
             let mut links = 0;
@@ -1410,6 +1454,7 @@ mod tests {
             }
             links
         };
+        fill(&mut lat, 0, 0);
         lat.find_links();
         let before = check(&lat);
         // A wall beside particle 0: the owner field is rebuilt and the links into it go.
@@ -1417,6 +1462,21 @@ mod tests {
         lat.find_links();
         let after = check(&lat);
         assert!(before > 100 && after < before, "{before} links, then {after}");
+        // Refilled as it was: nothing changed, everything kept.
+        fill(&mut lat, 0, 0);
+        lat.find_links();
+        assert!(lat.changed.iter().all(|&c| !c));
+        assert_eq!(check(&lat), after);
+        // Particle 0 one cell along x onto particle 1's node (which it takes: same d_B, added
+        // first), then grown along y into rows of its own: the links of the unchanged rows
+        // around them change too.
+        for (dx, grow) in [(1, 0), (1, 1)] {
+            fill(&mut lat, dx, grow);
+            lat.find_links();
+            let changed = lat.changed.iter().filter(|&&c| c).count();
+            assert!(changed > 0 && changed < lat.particles.rows(), "{changed} rows changed");
+            check(&lat);
+        }
     }
 
     /// The contiguous sums of a lattice without walls give the node-by-node totals (even and
