@@ -31,5 +31,5 @@ pub mod vtk;
 
 pub use error::{Error, Result};
 pub use lattice::{simd_level, ForceMethod, Lattice, Macroscopic, NodeKind, ParticleForce, SimdLevel, StepReport, Storage};
-pub use particles::{solid_fraction, ParticleBody, ParticleField, ParticleNode};
+pub use particles::{solid_fraction, ParticleBody, ParticleField, ParticleNode, SlabRows};
 pub use units::UnitConverter;

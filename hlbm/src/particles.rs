@@ -210,15 +210,15 @@ impl ParticleField {
     }
 
     /// Refills the whole field slab by slab, on all cores, with the bodies `bodies` (their
-    /// indices are the nodes' [`ParticleNode::body`]): `fill(z, push)` calls `push(y, node)`
-    /// for the nodes of slab `z`, in any order; every row is then sorted by `x`, and nodes
+    /// indices are the nodes' [`ParticleNode::body`]): `fill(z, rows)` calls
+    /// [`rows.push(y, node)`](SlabRows::push) for the nodes of slab `z`, in any order; every row is then sorted by `x`, and nodes
     /// pushed twice are superposed as [`add`](Self::add) does, in the order pushed — so the
     /// field does not depend on the thread count. Returns what each `fill` returned, in slab
     /// order.
     ///
     /// Refuses, naming it, a body with a non-finite centre, velocity or spin, and more than
     /// [`MAX_BODIES`] bodies (the field is left empty).
-    pub fn fill_slabs<R: Send>(&mut self, bodies: Vec<ParticleBody>, fill: impl Fn(usize, &mut dyn FnMut(usize, ParticleNode)) -> R + Sync) -> Result<Vec<R>> {
+    pub fn fill_slabs<R: Send>(&mut self, bodies: Vec<ParticleBody>, fill: impl Fn(usize, &mut SlabRows) -> R + Sync) -> Result<Vec<R>> {
         use rayon::prelude::*;
         self.clear();
         for b in &bodies {
@@ -233,7 +233,7 @@ impl ParticleField {
                 for row in slab.iter_mut() {
                     row.clear();
                 }
-                let r = fill(z, &mut |y, node| slab[y].push(node));
+                let r = fill(z, &mut SlabRows(slab));
                 let mut count = 0;
                 for row in slab.iter_mut() {
                     // Most rows come in order, each node once: one pass tells.
@@ -288,6 +288,19 @@ impl ParticleField {
     /// Whether no node is covered.
     pub fn is_empty(&self) -> bool {
         self.count == 0
+    }
+}
+
+/// The rows of one z-slab of a [`ParticleField`] that [`ParticleField::fill_slabs`] is
+/// filling. (A concrete type rather than a `dyn FnMut`: a call through a pointer per node was
+/// the mapping's every push.)
+pub struct SlabRows<'a>(&'a mut [Vec<ParticleNode>]);
+
+impl SlabRows<'_> {
+    /// Adds `node` to row `y` of the slab.
+    #[inline(always)]
+    pub fn push(&mut self, y: usize, node: ParticleNode) {
+        self.0[y].push(node);
     }
 }
 
