@@ -150,7 +150,8 @@ fn distances_match_brute_force_over_the_surface() {
     let hull = test_hull();
     let cuboid = Cuboid::new(Vector::new(0.3, 0.2, 0.1));
     let cylinder = Cylinder::new(0.25, 0.15);
-    let cases: Vec<(&str, &dyn Shape, (Vec<Vector>, Vec<[u32; 3]>), f64)> = vec![
+    type Mesh = (Vec<Vector>, Vec<[u32; 3]>);
+    let cases: Vec<(&str, &dyn Shape, Mesh, f64)> = vec![
         ("polyhedron", &hull, hull.to_trimesh(), 1e-12),
         ("cuboid", &cuboid, cuboid.to_trimesh(), 1e-12),
         ("cylinder", &cylinder, cylinder.to_trimesh(512), 0.15 * (1.0 - (std::f64::consts::PI / 512.0).cos()) + 1e-12),

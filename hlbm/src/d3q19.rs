@@ -113,6 +113,7 @@ pub fn collide(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES];
 /// [`collide`] with the block's [`moments`] `(ρ, u)` already taken (a block with particle
 /// nodes needs `u` for its forcing term first).
 #[inline(always)]
+#[allow(clippy::neg_multiply)] // the velocity components are `for_each_pair!`'s constants, ±1
 pub fn collide_at(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES]; 3]>, rho: [f64; LANES], u: [[f64; LANES]; 3]) -> ([f64; LANES], [[f64; LANES]; 3]) {
     let mut usq = [0.0; LANES];
     for l in 0..LANES {

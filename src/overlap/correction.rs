@@ -127,6 +127,7 @@ pub(crate) fn correct<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 /// Marches from `p` towards the neighbour offset `d` with steps of `max(phi, cell/4)` (sphere
 /// tracing far from the overlap, a floor near it so grazing rays cannot stall) until
 /// `max(d_A, d_B) <= 0`, then refines the crossing; `None` when the ray leaves the box.
+#[allow(clippy::too_many_arguments)] // one ray's state; a struct for it would live one call
 fn trace<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     grid: &Grid,
