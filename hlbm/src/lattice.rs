@@ -81,11 +81,11 @@ pub struct ParticleForce {
 ///
 ///   Cost: finding the links takes a pass over the particle nodes of the rows that changed
 ///   since the last step and their neighbours. With 18 % of a 128³ lattice covered by spheres
-///   of radius 4 (2 threads, `lbm_throughput`): plain fluid 147–160 MLUPs; forcing at about
-///   0.85 of it, momentum exchange at ~0.78 with the spheres at rest and ~0.69 with every row
-///   changing each step — a covered node costs ~1.9×, ~2.5× and ~3.5× a fluid node. (Finding
-///   the links inside the sweep, block by block, measured slower: 33 against 38 MLUPs on one
-///   thread.)
+///   of radius 4 (2 threads, `lbm_throughput`): plain fluid 147–161 MLUPs; forcing at
+///   0.81–0.85 of it, momentum exchange at 0.74–0.77 with the spheres at rest and 0.66–0.69
+///   with every row changing each step — a covered node costs 1.9–2.3×, 2.5–2.9× and 3.5–3.8×
+///   a fluid node. (Finding the links inside the sweep, block by block, measured slower: 33
+///   against 38 MLUPs on one thread.)
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ForceMethod {
