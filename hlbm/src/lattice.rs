@@ -1133,9 +1133,8 @@ impl Lattice {
 }
 
 /// Appends to `masks` the links of the particle nodes `nodes` (`x` and body index, sorted by
-/// `x`) of row
-/// `(y, z)`, read off the owner field; `span` is scratch of length `nx`. Compiled for the best
-/// instruction set this CPU has (the compares vectorise: measured 4 → 16 lanes).
+/// `x`) of row `(y, z)`, read off the owner field; `span` is scratch of length `nx`. Compiled
+/// for the best instruction set this CPU has (the compares vectorise: measured 4 → 16 lanes).
 fn row_links(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
     #[cfg(target_arch = "x86_64")]
     {
@@ -1279,9 +1278,9 @@ struct ParticleBlock {
 /// `Σ_links [u_p (f_i^out − f_ī^in) − c_i (f_i^out − w_i) − c_i (f_ī^in − w_i)]`.
 ///
 /// Per direction a masked vector select over the block (a lane-by-lane walk over each node's
-/// link bits mispredicts a branch per link), the selected terms then added pairwise
-/// ([`tree_sum`]): accumulated direction after direction, the four sums were chains of 18 and
-/// 10 dependent adds, each waiting on the last.
+/// link bits mispredicts a branch per link), the selected terms then added pairwise:
+/// accumulated direction after direction, the four sums were chains of 18 and 10 dependent
+/// adds, each waiting on the last (+1–3 % on `lbm_profile` with the exchange).
 #[inline(always)]
 fn exchange_half<const INCOMING: bool>(blk: &[[f64; LANES]; Q], links: &[u32; LANES], crossing: &mut [f64; LANES], exchange: &mut [[f64; LANES]; 3]) {
     // Per moving direction i: the population crossing where i is a link, else 0; and (the
@@ -1310,9 +1309,8 @@ fn exchange_half<const INCOMING: bool>(blk: &[[f64; LANES]; Q], links: &[u32; LA
         };
     }
     for_each_pair!(pair);
-    // Added pairwise: direction after direction, the four sums were chains of 18 and 10
-    // dependent adds. With c_i − c_ī per pair (i, ī): pairs 1–9 are x, y, z, (1,1,0), (1,−1,0),
-    // (1,0,1), (1,0,−1), (0,1,1), (0,1,−1).
+    // Added pairwise. The exchange by pairs (i, ī), as `c_i (g_i − g_ī)` with `g = f − w`:
+    // c_i of pairs 1–9 is x, y, z, (1,1,0), (1,−1,0), (1,0,1), (1,0,−1), (0,1,1), (0,1,−1).
     for l in 0..LANES {
         let g = |i: usize| f[i][l] - w[i][l];
         let d = |k: usize| g(k) - g(k + 9);
