@@ -211,18 +211,23 @@ impl ParticleField {
 
     /// Refills the whole field slab by slab, on all cores, with the bodies `bodies` (their
     /// indices are the nodes' [`ParticleNode::body`]): `fill(z, rows)` calls
-    /// [`rows.push(y, node)`](SlabRows::push) for the nodes of slab `z`, in any order; every row is then sorted by `x`, and nodes
-    /// pushed twice are superposed as [`add`](Self::add) does, in the order pushed — so the
-    /// field does not depend on the thread count. Returns what each `fill` returned, in slab
-    /// order.
+    /// [`rows.push(y, node)`](SlabRows::push) for the nodes of slab `z`, in any order; every
+    /// row is then sorted by `x`, and nodes pushed twice are superposed as [`add`](Self::add)
+    /// does, in the order pushed — so the field does not depend on the thread count. Returns
+    /// what each `fill` returned, in slab order.
     ///
     /// Refuses, naming it, a body with a non-finite centre, velocity or spin, and more than
     /// [`MAX_BODIES`] bodies (the field is left empty).
     pub fn fill_slabs<R: Send>(&mut self, bodies: Vec<ParticleBody>, fill: impl Fn(usize, &mut SlabRows) -> R + Sync) -> Result<Vec<R>> {
         use rayon::prelude::*;
-        self.clear();
+        // The rows are cleared slab by slab below; only a refused body clears them here.
+        self.bodies.clear();
+        self.count = 0;
         for b in &bodies {
-            self.add_body(b.id, b.centre, b.velocity, b.spin)?;
+            if let Err(e) = self.add_body(b.id, b.centre, b.velocity, b.spin) {
+                self.clear();
+                return Err(e);
+            }
         }
         let ny = self.ny;
         let results: Vec<(R, usize)> = self
