@@ -259,9 +259,9 @@ impl Fluid {
             b.torque = m * self.units.torque_to_physical(1.0);
             if let Some(rb) = world.bodies.get_mut(b.body) {
                 let total = b.force + b.volume * buoyancy;
+                applied.push((b.body, rb.user_force(), rb.user_torque()));
                 rb.add_force(total, true);
                 rb.add_torque(b.torque, true);
-                applied.push((b.body, total, b.torque));
             }
         }
         world.integration_parameters.dt = self.units.dt();

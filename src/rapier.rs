@@ -120,13 +120,17 @@ pub struct StepStats {
     pub neighbour_builds: usize,
 }
 
-/// Rapier keeps user forces across steps: takes back out forces and torques this crate added
-/// for one step, leaving the user's own.
+/// Rapier keeps user forces across steps: puts back each body's force and torque as they were
+/// before this crate added its own for one step (`applied` holds them, in the order they were
+/// recorded; restored in reverse). Restored, not subtracted: `f + g − g` is not always `f` in
+/// floating point, and the user's force must come back exactly.
 pub(crate) fn take_back(world: &mut PhysicsWorld, applied: &[(RigidBodyHandle, Vector, Vector)]) {
-    for &(h, f, t) in applied {
+    for &(h, f, t) in applied.iter().rev() {
         if let Some(rb) = world.bodies.get_mut(h) {
-            rb.add_force(-f, false);
-            rb.add_torque(-t, false);
+            rb.reset_forces(false);
+            rb.reset_torques(false);
+            rb.add_force(f, false);
+            rb.add_torque(t, false);
         }
     }
 }
@@ -380,7 +384,8 @@ impl DiscreteContacts {
         PairParameters::new(&a.material, &b.material, self.restitution)?.with_friction(self.friction).with_stiffness(self.stiffness)
     }
 
-    /// Computes and adds the contact forces of all handled candidate pairs; returns what it added.
+    /// Computes and adds the contact forces of all handled candidate pairs; returns each body's
+    /// force and torque as they were before (for [`take_back`]).
     ///
     /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
     /// candidates' order afterwards, so the result does not depend on the thread count.
@@ -445,9 +450,9 @@ impl DiscreteContacts {
         for (h, (f, t)) in added {
             if let Some(rb) = world.bodies.get_mut(h) {
                 if rb.is_dynamic() {
+                    applied.push((h, rb.user_force(), rb.user_torque()));
                     rb.add_force(f, true);
                     rb.add_torque(t, true);
-                    applied.push((h, f, t));
                 }
             }
         }

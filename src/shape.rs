@@ -52,9 +52,10 @@ pub trait Sdf: Send + Sync {
 
     /// Where the surface dilated by `offset` — the zero level of `distance − offset` — crosses
     /// the segment `p`–`q` (body frame), as the fraction `t ∈ [0, 1]` of the way from `p`, for
-    /// shapes that know it in closed form. Called only when `p` and `q` lie strictly on
-    /// opposite sides; `None` (the default) lets the caller find the crossing by root finding
-    /// on [`distance`](Self::distance).
+    /// shapes that know it in closed form. Called only when `p` lies strictly inside
+    /// (`distance(p) < offset`) and `q` strictly outside: the caller knows which end is which,
+    /// so the shape need not evaluate its distance to find out. `None` (the default) lets the
+    /// caller find the crossing by root finding on [`distance`](Self::distance).
     fn segment_crossing(&self, p: Vector, q: Vector, offset: Real) -> Option<Real> {
         let _ = (p, q, offset);
         None
@@ -422,17 +423,6 @@ impl ConvexShape {
         t.is_finite().then_some(t)
     }
 
-    /// The crossing of the segment `p`–`q` (ends on opposite sides of the surface dilated by
-    /// `offset`) as the exit from its inside end: the fraction from `p`.
-    fn exit_from_inside_end(&self, p: Vector, q: Vector, offset: Real) -> Option<Real> {
-        let e = q - p;
-        if self.distance(p) < offset {
-            self.exit_along(p, e, offset)
-        } else {
-            self.exit_along(q, -e, offset).map(|t| 1.0 - t)
-        }
-    }
-
     /// A sphere; refuses a radius that is not finite and positive.
     pub fn ball(radius: Real) -> Result<Self> {
         Ok(Self::Ball { radius: check_positive("radius", radius)? })
@@ -640,13 +630,13 @@ impl Sdf for ConvexShape {
     /// the half-space (linear), the ball (a quadratic) and the capsule (piecewise quadratic)
     /// also dilated; the cuboid, the cylinder and the polyhedron undilated (`offset = 0`), as
     /// the exit of the segment from the intersection of their slabs (and the cylinder's round
-    /// side).
+    /// side), taken from the inside end `p`.
     fn segment_crossing(&self, p: Vector, q: Vector, offset: Real) -> Option<Real> {
         let e = q - p;
         let t = match self {
             Self::HalfSpace { normal } => (offset - normal.dot(p)) / normal.dot(e),
-            Self::Ball { .. } | Self::Capsule { .. } => self.exit_from_inside_end(p, q, offset)?,
-            Self::Cuboid { .. } | Self::Cylinder { .. } | Self::Polyhedron(_) if offset == 0.0 => self.exit_from_inside_end(p, q, offset)?,
+            Self::Ball { .. } | Self::Capsule { .. } => self.exit_along(p, e, offset)?,
+            Self::Cuboid { .. } | Self::Cylinder { .. } | Self::Polyhedron(_) if offset == 0.0 => self.exit_along(p, e, offset)?,
             _ => return None,
         };
         t.is_finite().then(|| t.clamp(0.0, 1.0))

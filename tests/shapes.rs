@@ -196,7 +196,12 @@ fn closed_form_crossings_equal_the_distance_functions_root() {
         if dp == 0.0 || dq == 0.0 || (dp < 0.0) == (dq < 0.0) {
             return false;
         }
-        let t = shape.segment_crossing(p, q, eps).expect("a closed form for this shape");
+        // The contract: called from the inside end; the fraction is from that end.
+        let t = if dp < 0.0 {
+            shape.segment_crossing(p, q, eps).expect("a closed form for this shape")
+        } else {
+            1.0 - shape.segment_crossing(q, p, eps).expect("a closed form for this shape")
+        };
         let (mut lo, mut hi) = (0.0, 1.0);
         for _ in 0..200 {
             let mid = 0.5 * (lo + hi);

@@ -167,9 +167,10 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         self.rot * self.shape.gradient(self.rot_t * (x - self.origin))
     }
 
-    /// The shape's closed-form crossing of the segment `x0`–`x1` ([`Sdf::segment_crossing`]).
-    fn segment_crossing(&self, x0: Vector, x1: Vector) -> Option<Real> {
-        self.shape.segment_crossing(self.rot_t * (x0 - self.origin), self.rot_t * (x1 - self.origin), self.eps)
+    /// The shape's closed-form crossing of the segment from `inside` to `outside`, as the
+    /// fraction from `inside` ([`Sdf::segment_crossing`]).
+    fn segment_crossing(&self, inside: Vector, outside: Vector) -> Option<Real> {
+        self.shape.segment_crossing(self.rot_t * (inside - self.origin), self.rot_t * (outside - self.origin), self.eps)
     }
 
     /// The body's face planes `(n, h)` in B's frame (`n·x <= h` inside), moved out by `ε`.
