@@ -7,32 +7,9 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use discrete_contact::prelude::*;
 
-fn pairs() -> Vec<(&'static str, ConvexShape, Pose, ConvexShape, Pose)> {
-    let tilt = Rotation::from_axis_angle(Vector::new(1.0, 0.0, 1.0).normalize(), 0.4);
-    vec![
-        (
-            "sphere_sphere",
-            ConvexShape::ball(0.01).unwrap(),
-            Pose::from_translation(Vector::new(0.001, 0.0198, 0.0)),
-            ConvexShape::ball(0.01).unwrap(),
-            Pose::IDENTITY,
-        ),
-        (
-            "cylinder_plane",
-            ConvexShape::cylinder(0.00265, 0.004).unwrap(),
-            Pose::from_parts(Vector::new(0.0, 0.0039, 0.0), tilt),
-            ConvexShape::half_space(Vector::Y).unwrap(),
-            Pose::IDENTITY,
-        ),
-        (
-            "cube_cube",
-            ConvexShape::cuboid(Vector::splat(0.005)).unwrap(),
-            Pose::from_parts(Vector::new(0.001, 0.0098, 0.0), Rotation::from_rotation_y(0.3)),
-            ConvexShape::cuboid(Vector::splat(0.005)).unwrap(),
-            Pose::IDENTITY,
-        ),
-    ]
-}
+#[path = "common/pairs.rs"]
+mod pairs;
+use pairs::pairs;
 
 fn bench(c: &mut Criterion) {
     let m = Material::new(5e8, 0.35).unwrap();

@@ -2,43 +2,36 @@
 //! one of the `contact` bench's pairs, sub-cell integration, evaluated again and again as a
 //! persistent contact (seeded with its last box) or as a first touch.
 //!
-//! `cargo run --release --example contact_profile -- --pair sphere --n-c 4 --iterations 2000`
-//! (`--pair sphere|cylinder|cube`, `--first` for first touches). Prints the mean time per
+//! `cargo run --release --example contact_profile -- --pair sphere_sphere --n-c 4 --iterations 2000`
+//! (`--pair sphere_sphere|cylinder_plane|cube_cube`, `--first` for first touches). Prints the mean time per
 //! evaluation and the result, so two builds can be compared on the same output.
 
 mod common;
+#[path = "../benches/common/pairs.rs"]
+mod pairs;
+
+use pairs::pairs;
 
 use discrete_contact::prelude::*;
 
 fn main() {
     let args = common::Args::from_env(include_str!("contact_profile.rs"));
-    let pair = args.value("--pair").unwrap_or("sphere").to_string();
+    let pair = args.value("--pair").unwrap_or("sphere_sphere").to_string();
     let n_c = args.number("--n-c", 4.0) as usize;
     let iterations = args.number("--iterations", 2000.0) as usize;
     let first = args.flag("--first");
-    let tilt = Rotation::from_axis_angle(Vector::new(1.0, 0.0, 1.0).normalize(), 0.4);
-    let (sa, pa, sb, pb) = match pair.as_str() {
-        "sphere" => (ConvexShape::ball(0.01).unwrap(), Pose::from_translation(Vector::new(0.001, 0.0198, 0.0)), ConvexShape::ball(0.01).unwrap(), Pose::IDENTITY),
-        "cylinder" => (
-            ConvexShape::cylinder(0.00265, 0.004).unwrap(),
-            Pose::from_parts(Vector::new(0.0, 0.0039, 0.0), tilt),
-            ConvexShape::half_space(Vector::Y).unwrap(),
-            Pose::IDENTITY,
-        ),
-        "cube" => (
-            ConvexShape::cuboid(Vector::splat(0.005)).unwrap(),
-            Pose::from_parts(Vector::new(0.001, 0.0098, 0.0), Rotation::from_rotation_y(0.3)),
-            ConvexShape::cuboid(Vector::splat(0.005)).unwrap(),
-            Pose::IDENTITY,
-        ),
-        other => {
-            eprintln!("unknown --pair {other}: sphere, cylinder or cube");
-            std::process::exit(2);
-        }
+    let names = pairs().iter().map(|p| p.0).collect::<Vec<_>>().join(", ");
+    let Some((_, sa, pa, sb, pb)) = pairs().into_iter().find(|p| p.0 == pair) else {
+        eprintln!("unknown --pair {pair}: one of {names}");
+        std::process::exit(2);
     };
+    let settings = OverlapSettings::new(n_c, IntegrationMode::Subcell).unwrap_or_else(|e| {
+        eprintln!("--n-c: {e}");
+        std::process::exit(2);
+    });
     let m = Material::new(5e8, 0.35).unwrap();
     let params = PairParameters::new(&m, &m, 0.85).unwrap();
-    let model = ContactModel::new(params, OverlapSettings::new(n_c, IntegrationMode::Subcell).unwrap());
+    let model = ContactModel::new(params, settings);
     let a = BodyState::at_rest(&sa, pa).moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO);
     let b = BodyState::at_rest(&sb, pb);
     let mut state = None;

@@ -46,7 +46,12 @@ fn spread(errors: &[f64]) -> (f64, f64, f64) {
 
 fn main() {
     let args = common::Args::from_env(include_str!("polyhedra_check.rs"));
-    let cases = args.number("--cases", 300.0) as usize;
+    let cases = args.number("--cases", 300.0);
+    if !(cases >= 1.0) {
+        eprintln!("--cases: needs at least 1 pair, got {cases}");
+        std::process::exit(2);
+    }
+    let cases = cases as usize;
     let worst = args.number("--worst", f64::INFINITY);
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     let n_cs = [4usize, 8, 16];

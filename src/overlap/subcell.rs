@@ -182,7 +182,6 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     sums: Sums,
 }
 
-
 /// Volume, moment, normal and bounds summed over the clipped pieces.
 struct Sums {
     volume: Real,
