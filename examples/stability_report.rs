@@ -1,6 +1,6 @@
 //! Runs the stability matrix (stiff materials, fast and slow impacts, restitution 0.1–1,
-//! mass ratios, grazing hit, thin plate, resting contact, a refused step) in the rapier
-//! pipeline and prints one row per case: outcome, error, sub-steps, wall time.
+//! mass ratios, grazing hit, thin plate, resting contact, a refused step, a box on a ramp and a
+//! ten-box pyramid with friction) in the rapier pipeline and prints one row per case: outcome, error, sub-steps, wall time.
 //!
 //! Then the precision table: the sphere–wall impacts with the body's state in f64 and rounded
 //! to f32 after every sub-step (what rapier3d, f32, would store), near the origin and 1 m and

@@ -1,14 +1,16 @@
 //! Persistent contact state: a contact fixes its damping at first touch and carries its
-//! corrected box from one sub-step to the next until the bodies part.
+//! corrected box and its tangential spring's history from one sub-step to the next until the
+//! bodies part.
 
 use parry3d_f64::bounding_volume::Aabb;
 
 use crate::error::Result;
-use crate::force::{contact_force, BodyKinematics, ContactForce};
+use crate::force::{contact_force_with_history, BodyKinematics, ContactForce};
 use crate::material::PairParameters;
 use crate::math::{Pose, Real};
 use crate::overlap::{compute_overlap, OverlapGeometry, OverlapSettings};
 use crate::shape::Sdf;
+use crate::tangential::TangentialHistory;
 
 /// A body as the contact sees it: shape, pose and motion.
 #[derive(Clone, Copy, Debug)]
@@ -47,6 +49,14 @@ pub struct ContactState {
     pub reference_approach_speed: Real,
     /// Last corrected overlap box (pair frame), the rough box of the next sub-step.
     pub corrected_box: Aabb,
+    /// The tangential spring's history ([`TangentialLaw::Spring`](crate::TangentialLaw::Spring);
+    /// stays empty under the slip-speed law).
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    pub tangential: TangentialHistory,
+    /// Normal stiffness `dF_n/dd` at the last evaluation (N/m): what the time-step advice of
+    /// the live contact resolves.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    pub normal_stiffness: Real,
 }
 
 /// Geometry and force of one evaluation.
@@ -96,6 +106,8 @@ impl ContactModel {
             damping: self.params.damping_for(approach),
             reference_approach_speed: approach,
             corrected_box: geometry.corrected_box,
+            tangential: TangentialHistory::default(),
+            normal_stiffness: 0.0,
         });
         // In a binary impact the approach speed only falls after first touch. A contact that
         // a third body drives faster (a pile, a contact begun while sliding) re-bases `c` on
@@ -106,7 +118,13 @@ impl ContactModel {
             s.reference_approach_speed = approach;
         }
         s.corrected_box = geometry.corrected_box;
-        let force = contact_force(&self.params, s.damping, &geometry, &a.kinematics, &b.kinematics);
+        let carried = s.tangential.carried(&a.pose, &b.pose, geometry.normal);
+        let (force, spring) =
+            contact_force_with_history(&self.params, s.damping, &geometry, &a.kinematics, &b.kinematics, carried, s.tangential.sliding);
+        s.normal_stiffness = force.stiffness;
+        if self.params.tangential == crate::TangentialLaw::Spring {
+            s.tangential.record(spring.displacement, spring.sliding, geometry.contact_point, &a.pose, &b.pose);
+        }
         Ok(Some(ContactOutput { geometry, force }))
     }
 }

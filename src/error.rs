@@ -42,13 +42,14 @@ pub enum Error {
         b: String,
     },
     /// The time step cannot resolve a contact and the policy forbids sub-stepping further.
-    #[error("time step {dt:e} s is too large for the stiffest contact (Hertz contact time {contact_time:e} s between {pair}); use a step of at most {recommended:e} s or allow {substeps_needed} sub-steps")]
+    #[error("time step {dt:e} s is too large for the stiffest contact (contact time {contact_time:e} s between {pair}); use a step of at most {recommended:e} s or allow {substeps_needed} sub-steps")]
     TimeStepTooLarge {
         /// The step given (s).
         dt: Real,
         /// The largest safe (sub-)step (s).
         recommended: Real,
-        /// The Hertz contact time that sets it (s).
+        /// The contact time that sets it (s): Hertz's, or the tangential spring's when that is
+        /// shorter than what the sub-steps per contact allow for.
         contact_time: Real,
         /// Sub-steps per step that would resolve it.
         substeps_needed: usize,

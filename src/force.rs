@@ -1,10 +1,12 @@
 //! The Nassauer–Kuna force law (DESIGN §3): normal force from overlap volume and indentation
-//! with restitution damping, static/kinetic friction, torques on both bodies.
+//! with restitution damping, friction (the slip-speed law here, the tangential spring in
+//! [`tangential`]), torques on both bodies.
 
 use crate::error::{check_finite_vec, Result};
 use crate::material::PairParameters;
 use crate::math::{Real, Vector};
 use crate::overlap::OverlapGeometry;
+use crate::tangential::{self, SpringForce, TangentialLaw};
 
 /// Where a body is and how it moves (world frame, SI).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,6 +53,9 @@ pub struct ContactForce {
     pub tangential_force: Real,
     /// `ḋ = -v_AB·n`: positive while the bodies approach (m/s).
     pub approach_speed: Real,
+    /// The undamped law's normal stiffness `dF_n/dd` here (N/m, [`normal_stiffness`]): what
+    /// the time-step advice of a live contact resolves.
+    pub stiffness: Real,
 }
 
 impl ContactForce {
@@ -60,17 +65,38 @@ impl ContactForce {
     }
 }
 
-/// Normal force magnitude `F_n = max(0, E* k sqrt(V d) (1 + c ḋ))`.
-pub fn normal_force(params: &PairParameters, damping: Real, geometry: &OverlapGeometry, approach_speed: Real) -> Real {
+/// Undamped normal force `E* k sqrt(V d)` (N); zero without an overlap.
+fn elastic_force(params: &PairParameters, geometry: &OverlapGeometry) -> Real {
     let (v, d) = (geometry.volume, geometry.indentation);
     if v <= 0.0 || d <= 0.0 {
         return 0.0;
     }
-    let k = params.stiffness.value(v, d, geometry.surface_area);
-    (params.effective_modulus * k * (v * d).sqrt() * (1.0 + damping * approach_speed)).max(0.0)
+    params.effective_modulus * params.stiffness.value(v, d, geometry.surface_area) * (v * d).sqrt()
 }
 
-/// Normal, friction and torques of a contact with damping constant `damping` (s/m).
+/// Stiffness `dF/dd` (N/m) of the undamped normal law `F = E* k √(V d)` for an overlap whose
+/// undamped force is `elastic_force`: `F (1 + d A/V) / (2 d)`, with the overlap's cross-section
+/// `A = dV/dd` taken as half its surface area (a thin lens or cap has two faces) and `d A/V`
+/// kept within [1, 2] — `1.5 F/d` for a cap (Hertz's), `F/d` for a flat punch. A missing area
+/// counts as a cap; zero without an overlap.
+pub fn normal_stiffness(elastic_force: Real, geometry: &OverlapGeometry) -> Real {
+    let (v, d) = (geometry.volume, geometry.indentation);
+    if !(v > 0.0 && d > 0.0 && elastic_force > 0.0) {
+        return 0.0;
+    }
+    let s = geometry.surface_area;
+    let shape = if s > 0.0 && s.is_finite() { (0.5 * d * s / v).clamp(1.0, 2.0) } else { 2.0 };
+    elastic_force * (1.0 + shape) / (2.0 * d)
+}
+
+/// Normal force magnitude `F_n = max(0, E* k sqrt(V d) (1 + c ḋ))`.
+pub fn normal_force(params: &PairParameters, damping: Real, geometry: &OverlapGeometry, approach_speed: Real) -> Real {
+    (elastic_force(params, geometry) * (1.0 + damping * approach_speed)).max(0.0)
+}
+
+/// Normal, friction and torques of a contact with damping constant `damping` (s/m), for its
+/// first evaluation (no tangential history: the spring law, [`TangentialLaw::Spring`], starts
+/// unstretched). A persistent contact calls [`contact_force_with_history`].
 pub fn contact_force(
     params: &PairParameters,
     damping: Real,
@@ -78,28 +104,59 @@ pub fn contact_force(
     a: &BodyKinematics,
     b: &BodyKinematics,
 ) -> ContactForce {
+    contact_force_with_history(params, damping, geometry, a, b, Vector::ZERO, false).0
+}
+
+/// Normal, friction and torques of a contact whose tangential spring carries the displacement
+/// `carried` (from [`TangentialHistory::carried`](crate::tangential::TangentialHistory::carried))
+/// and was sliding (`was_sliding`) at its last evaluation; also returns the spring's new state
+/// (zero and not sliding under the slip-speed law, which has no history).
+pub fn contact_force_with_history(
+    params: &PairParameters,
+    damping: Real,
+    geometry: &OverlapGeometry,
+    a: &BodyKinematics,
+    b: &BodyKinematics,
+    carried: Vector,
+    was_sliding: bool,
+) -> (ContactForce, SpringForce) {
     let n = geometry.normal;
     let x_c = geometry.contact_point;
     let v_ab = a.velocity_at(x_c) - b.velocity_at(x_c);
     let v_n = v_ab.dot(n);
     let approach_speed = -v_n;
-    let f_n = normal_force(params, damping, geometry, approach_speed);
+    let f_el = elastic_force(params, geometry);
+    let f_n = (f_el * (1.0 + damping * approach_speed)).max(0.0);
     let mut force = n * f_n;
     let mut f_t = 0.0;
-    if !params.friction.is_none() && f_n > 0.0 {
-        let v_t = v_ab - n * v_n;
-        let slip = v_t.length();
-        if slip > 0.0 {
-            f_t = params.friction.coefficient(slip) * f_n;
-            force -= v_t * (f_t / slip);
+    let v_t = v_ab - n * v_n;
+    let mut spring = SpringForce { force_on_a: Vector::ZERO, displacement: Vector::ZERO, sliding: false };
+    if !params.friction.is_none() && f_el > 0.0 {
+        match params.tangential {
+            TangentialLaw::SlipSpeed => {
+                let slip = v_t.length();
+                if slip > 0.0 && f_n > 0.0 {
+                    f_t = params.friction.coefficient(slip) * f_n;
+                    force -= v_t * (f_t / slip);
+                }
+            }
+            TangentialLaw::Spring => {
+                let k_t = params.tangential_stiffness_ratio * normal_stiffness(f_el, geometry);
+                let eta_t = tangential::damping(params, k_t, damping, f_el);
+                spring = tangential::spring_force(&params.friction, k_t, eta_t, f_n, carried, v_t, was_sliding);
+                force += spring.force_on_a;
+                f_t = spring.force_on_a.length();
+            }
         }
     }
-    ContactForce {
+    let contact = ContactForce {
         force_on_a: force,
         torque_on_a: (x_c - a.center_of_mass).cross(force),
         torque_on_b: (x_c - b.center_of_mass).cross(-force),
         normal_force: f_n,
         tangential_force: f_t,
         approach_speed,
-    }
+        stiffness: normal_stiffness(f_el, geometry),
+    };
+    (contact, spring)
 }

@@ -5,7 +5,8 @@
 //!
 //! Data flows one way: body pose → [`shape`] (SDF) → [`overlap`] (volume, contact point,
 //! normal, indentation) → [`force`] (normal force with restitution damping, friction,
-//! torques) → body. [`contact`] keeps what a contact remembers between sub-steps.
+//! torques; the history-dependent tangential spring in [`tangential`]) → body. [`contact`]
+//! keeps what a contact remembers between sub-steps.
 //!
 //! ```
 //! use discrete_contact::prelude::*;
@@ -57,8 +58,8 @@
 //! - [`Error::UnboundedOverlap`] — both bodies unbounded (two half-spaces); such a pair has no
 //!   contact to compute.
 //! - [`Error::TimeStepTooLarge`] — (rapier drop-in) a step cannot give a contact 30 sub-steps
-//!   (or the number set with `with_substeps_per_contact`) within its Hertz contact time under
-//!   the chosen policy; the message names the pair, the
+//!   (or the number set with `with_substeps_per_contact`) within its Hertz contact time (and
+//!   the tangential spring at least 5 within its own) under the chosen policy; the message names the pair, the
 //!   recommended step and the sub-steps needed. Lower `dt` or allow more sub-steps.
 //! - [`Error::ContactTooSoft`] — (rapier drop-in) Hertz puts an impact's indentation beyond
 //!   the limit (half the smaller body's smallest half-extent by default): the bodies would
@@ -152,6 +153,7 @@ pub mod periodic;
 #[cfg(feature = "rapier")]
 pub mod rapier;
 pub mod shape;
+pub mod tangential;
 pub mod validation;
 
 /// The README's example, compiled and run as a doc test.
@@ -161,10 +163,11 @@ pub struct ReadmeDoctests;
 
 pub use contact::{BodyState, ContactModel, ContactOutput, ContactState};
 pub use error::{Error, Result};
-pub use force::{contact_force, normal_force, BodyKinematics, ContactForce};
+pub use force::{contact_force, contact_force_with_history, normal_force, BodyKinematics, ContactForce};
 pub use material::{damping_from_restitution, effective_modulus, hertz_contact_time, Friction, Material, PairParameters, StiffnessFactor};
 pub use overlap::{compute_overlap, IntegrationMode, OverlapGeometry, OverlapSettings};
 pub use shape::{ConvexShape, Sdf};
+pub use tangential::TangentialLaw;
 
 /// The math types of parry/rapier (f64): `Real`, `Vector` (glam `DVec3`), `Pose`, `Rotation`.
 pub mod math {
@@ -188,6 +191,6 @@ pub mod prelude {
     pub use crate::math::{Pose, Real, Rotation, Vector};
     pub use crate::{
         BodyKinematics, BodyState, ContactModel, ConvexShape, Friction, IntegrationMode, Material, OverlapSettings,
-        PairParameters, Sdf, StiffnessFactor,
+        PairParameters, Sdf, StiffnessFactor, TangentialLaw,
     };
 }

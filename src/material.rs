@@ -4,6 +4,7 @@
 
 use crate::error::{check_non_negative, check_positive, check_range, Error, Result};
 use crate::math::Real;
+use crate::tangential::TangentialLaw;
 
 /// An isotropic elastic material.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,7 +79,8 @@ impl StiffnessFactor {
     }
 }
 
-/// Static/kinetic friction of Nassauer & Kuna.
+/// Static/kinetic friction coefficients, applied by either tangential law
+/// ([`TangentialLaw`]); the transition speed is Nassauer & Kuna's slip-speed law's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "checkpoint", serde(try_from = "FrictionFields"))]
@@ -191,6 +193,16 @@ pub struct PairParameters {
     pub restitution: Real,
     /// Friction; [`Friction::NONE`] skips the tangential force.
     pub friction: Friction,
+    /// Which tangential law applies the friction; [`TangentialLaw::SlipSpeed`] (the seeds')
+    /// unless set.
+    pub tangential: TangentialLaw,
+    /// Mindlin's `κ = k_t / k_n` of the two materials, the tangential spring's stiffness ratio
+    /// ([`crate::tangential::stiffness_ratio`]).
+    pub tangential_stiffness_ratio: Real,
+    /// Effective mass (kg) of the pair against a tangential load at the contact, rotation
+    /// included (`2/7 m*` for two spheres); sets the tangential spring's damping. `None`:
+    /// the spring is damped with the normal law's constant instead (see [`crate::tangential`]).
+    pub tangential_mass: Option<Real>,
     /// Approach speeds below this (m/s) count as this when the damping is fixed at first touch,
     /// so a contact that starts at rest gets a finite damping constant.
     pub min_approach_speed: Real,
@@ -204,6 +216,9 @@ impl PairParameters {
             stiffness: StiffnessFactor::Curved,
             restitution: check_range("restitution", restitution, 0.0, false, 1.0, true, "0 < e <= 1")?,
             friction: Friction::NONE,
+            tangential: TangentialLaw::SlipSpeed,
+            tangential_stiffness_ratio: crate::tangential::stiffness_ratio(a, b),
+            tangential_mass: None,
             min_approach_speed: 1e-3,
         })
     }
@@ -212,6 +227,22 @@ impl PairParameters {
     pub fn with_friction(mut self, friction: Friction) -> Self {
         self.friction = friction;
         self
+    }
+
+    /// With another tangential law for the friction.
+    pub fn with_tangential_law(mut self, law: TangentialLaw) -> Self {
+        self.tangential = law;
+        self
+    }
+
+    /// With the pair's effective tangential mass `m_t > 0` (kg; infinite for two bodies that do
+    /// not move): the tangential spring is then damped to the restitution's damping ratio.
+    pub fn with_tangential_mass(mut self, m_t: Real) -> Result<Self> {
+        if !(m_t > 0.0) || m_t.is_nan() {
+            return Err(Error::InvalidParameter { name: "tangential_mass", value: m_t, allowed: "> 0 (kg), infinite allowed" });
+        }
+        self.tangential_mass = Some(m_t);
+        Ok(self)
     }
 
     /// With another stiffness factor; a custom `k` must be finite and positive.

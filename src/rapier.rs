@@ -52,6 +52,7 @@ use crate::overlap::OverlapSettings;
 use crate::neighbours::NeighbourList;
 use crate::periodic::{PeriodicBox, Sphere};
 use crate::shape::{ConvexShape, Sdf};
+use crate::tangential::{stiffness_ratio, TangentialLaw};
 
 /// What to do when the user's step cannot resolve a contact.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,6 +79,11 @@ pub const SUBSTEPS_PER_CONTACT: Real = 30.0;
 /// The fewest sub-steps per Hertz contact time accepted: the explicit integration of the
 /// stiffest contact stays stable with a margin.
 pub const MIN_SUBSTEPS_PER_CONTACT: Real = 5.0;
+
+/// The fewest sub-steps per half-period of a live contact's own oscillation (normal, or the
+/// tangential spring's): `ω Δt <= π/2.5 ≈ 1.26`, a margin below the explicit integration's
+/// limit `ω Δt < 2`.
+pub const STABLE_SUBSTEPS_PER_HALF_PERIOD: Real = 2.5;
 
 /// A handled collider: its SDF and material.
 #[derive(Clone, Debug)]
@@ -141,6 +147,8 @@ pub struct DiscreteContacts {
     settings: OverlapSettings,
     restitution: Real,
     friction: Friction,
+    #[cfg_attr(feature = "checkpoint", serde(default = "default_tangential_law"))]
+    tangential: TangentialLaw,
     stiffness: StiffnessFactor,
     policy: StepPolicy,
     substeps_per_contact: Real,
@@ -154,6 +162,11 @@ pub struct DiscreteContacts {
     /// The neighbour search's memory; rebuilt from the bodies when empty (after a restart).
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     neighbours: std::sync::Mutex<Neighbours>,
+}
+
+/// The drop-in's tangential law unless set: the spring, so that a scene at rest stays at rest.
+fn default_tangential_law() -> TangentialLaw {
+    TangentialLaw::Spring
 }
 
 /// The handled bounded colliders in handle order (for the generation of the handled set they
@@ -189,13 +202,18 @@ impl PhysicsHooks for Hooks<'_> {
 
 impl DiscreteContacts {
     /// Contacts with this overlap resolution and restitution `0 < e <= 1`; frictionless, curved
-    /// `k`, automatic sub-stepping up to 10 000 sub-steps per step.
+    /// `k`, automatic sub-stepping up to 10 000 sub-steps per step. Friction, once set with
+    /// [`with_friction`](Self::with_friction), acts through the tangential spring
+    /// ([`TangentialLaw::Spring`]): what a rapier scene expects — a box stays on a ramp, a stack
+    /// stands — where Nassauer & Kuna's slip-speed law lets everything at rest creep;
+    /// [`with_tangential_law`](Self::with_tangential_law) switches.
     pub fn new(settings: OverlapSettings, restitution: Real) -> Result<Self> {
         crate::error::check_range("restitution", restitution, 0.0, false, 1.0, true, "0 < e <= 1")?;
         Ok(Self {
             settings,
             restitution,
             friction: Friction::NONE,
+            tangential: default_tangential_law(),
             stiffness: StiffnessFactor::Curved,
             policy: StepPolicy::AutoSubstep { max_substeps: 10_000 },
             substeps_per_contact: SUBSTEPS_PER_CONTACT,
@@ -235,6 +253,13 @@ impl DiscreteContacts {
     /// With friction for every handled pair.
     pub fn with_friction(mut self, friction: Friction) -> Self {
         self.friction = friction;
+        self
+    }
+
+    /// With another tangential law for the friction (the default is
+    /// [`TangentialLaw::Spring`]; [`TangentialLaw::SlipSpeed`] is the seeds' model).
+    pub fn with_tangential_law(mut self, law: TangentialLaw) -> Self {
+        self.tangential = law;
         self
     }
 
@@ -380,8 +405,25 @@ impl DiscreteContacts {
         }
     }
 
+    /// `1/m + r²/I_min` (1/kg) of the body of collider `c`: how it yields to a tangential load
+    /// at distance `r` from its centre (r infinite: a half-space, not rotated by it); zero for a
+    /// body that does not move.
+    fn tangential_compliance(world: &PhysicsWorld, c: ColliderHandle, r: Real) -> Real {
+        let Some(rb) = world.colliders[c].parent().and_then(|h| world.bodies.get(h)) else { return 0.0 };
+        if !rb.is_dynamic() {
+            return 0.0;
+        }
+        let props = &rb.mass_properties().local_mprops;
+        let i_min = props.principal_inertia().min_element();
+        let rotation = if r.is_finite() && i_min > 0.0 { r * r / i_min } else { 0.0 };
+        1.0 / rb.mass() + rotation
+    }
+
     fn params(&self, a: &Handled, b: &Handled) -> Result<PairParameters> {
-        PairParameters::new(&a.material, &b.material, self.restitution)?.with_friction(self.friction).with_stiffness(self.stiffness)
+        PairParameters::new(&a.material, &b.material, self.restitution)?
+            .with_friction(self.friction)
+            .with_tangential_law(self.tangential)
+            .with_stiffness(self.stiffness)
     }
 
     /// Computes and adds the contact forces of all handled candidate pairs; returns each body's
@@ -408,7 +450,11 @@ impl DiscreteContacts {
             if apart {
                 return Ok(None);
             }
-            let model = ContactModel::new(this.params(ha, hb)?, this.settings);
+            // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
+            // not computed yet (zero before its first step) leaves it unknown.
+            let m_t = 1.0 / (Self::tangential_compliance(w, ca, ha.radius) + Self::tangential_compliance(w, cb, hb.radius));
+            let params = if m_t > 0.0 { this.params(ha, hb)?.with_tangential_mass(m_t)? } else { this.params(ha, hb)? };
+            let model = ContactModel::new(params, this.settings);
             let mut state = this.states.get(&(ca, cb)).copied();
             let out = model.evaluate(
                 &BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
@@ -564,8 +610,22 @@ impl DiscreteContacts {
     /// [`with_indentation_limit`](Self::with_indentation_limit)) of the smaller body's smallest
     /// half-extent is refused
     /// with [`Error::ContactTooSoft`].
+    ///
+    /// With friction through the tangential spring, its oscillation counts too: stiffness
+    /// `κ k_n` against the tangential effective mass `m_t` (`1/m_t = Σ 1/m + r²/I_min` over the
+    /// bodies, `r` the bounding radius; `2/7 m*` for two spheres), so its contact time is
+    /// `t_H √(m_t / (κ m*))`, about half of `t_H`. A live contact also counts with its own
+    /// stiffness `k_n = dF_n/dd` from its last evaluation (a face resting on a face is far
+    /// stiffer than the Hertz sphere of the bounding radii): half-periods `π √(m*/k_n)` and,
+    /// with the spring, `π √(m_t/(κ k_n))`. These need stability and a steady hold, not a
+    /// restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`] sub-steps at the default
+    /// [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps per contact are set,
+    /// never fewer than [`STABLE_SUBSTEPS_PER_HALF_PERIOD`].
     pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
-        let mut worst: Option<(Real, String)> = None;
+        // (largest sub-step, the contact time that sets it, the pair)
+        let mut worst: Option<(Real, Real, String)> = None;
+        let spring = self.tangential == TangentialLaw::Spring && !self.friction.is_none();
+        let per_half_period = (MIN_SUBSTEPS_PER_CONTACT * self.substeps_per_contact / SUBSTEPS_PER_CONTACT).max(STABLE_SUBSTEPS_PER_HALF_PERIOD);
         for (ca, cb) in self.lookahead_pairs(world, dt)? {
             let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
             let (pa, ka, _, ma) = Self::kinematics(world, ca);
@@ -603,24 +663,42 @@ impl DiscreteContacts {
             if depth > limit {
                 return Err(Error::ContactTooSoft { pair: format!("colliders {ca:?} and {cb:?}"), speed: v_normal, indentation: depth, limit });
             }
-            if worst.as_ref().is_none_or(|w| t_h < w.0) {
-                worst = Some((t_h, format!("colliders {ca:?} and {cb:?}")));
+            let mut limit = (t_h / self.substeps_per_contact, t_h);
+            let mut resolve = |t: Real| {
+                if t.is_finite() && t > 0.0 && t / per_half_period < limit.0 {
+                    limit = (t / per_half_period, t);
+                }
+            };
+            let kappa = stiffness_ratio(&ha.material, &hb.material);
+            let m_t = 1.0 / (Self::tangential_compliance(world, ca, ha.radius) + Self::tangential_compliance(world, cb, hb.radius));
+            if spring {
+                resolve(t_h * (m_t / (kappa * m_star)).sqrt());
+            }
+            // A live contact may be far stiffer than Hertz's sphere of the bounding radii (a face
+            // on a face): its own stiffness's half-periods, normal and tangential, count too.
+            if let Some(k_n) = self.contact(ca, cb).map(|s| s.normal_stiffness).filter(|k| *k > 0.0) {
+                resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
+                if spring {
+                    resolve(core::f64::consts::PI * (m_t / (kappa * k_n)).sqrt());
+                }
+            }
+            if worst.as_ref().is_none_or(|w| limit.0 < w.0) {
+                worst = Some((limit.0, limit.1, format!("colliders {ca:?} and {cb:?}")));
             }
         }
-        let Some((t_h, pair)) = worst else {
+        let Some((recommended, contact_time, pair)) = worst else {
             return Ok(match self.policy {
                 StepPolicy::Fixed { substeps } => substeps.max(1),
                 StepPolicy::AutoSubstep { .. } => 1,
             });
         };
-        let recommended = t_h / self.substeps_per_contact;
         let needed = (dt / recommended).ceil().max(1.0) as usize;
         let (allowed, chosen) = match self.policy {
             StepPolicy::Fixed { substeps } => (substeps.max(1), substeps.max(1)),
             StepPolicy::AutoSubstep { max_substeps } => (max_substeps.max(1), needed),
         };
         if needed > allowed {
-            return Err(Error::TimeStepTooLarge { dt, recommended, contact_time: t_h, substeps_needed: needed, pair });
+            return Err(Error::TimeStepTooLarge { dt, recommended, contact_time, substeps_needed: needed, pair });
         }
         Ok(chosen.max(needed))
     }

@@ -41,6 +41,9 @@ fn restitution_friction_and_resolution() {
     let p = PairParameters::new(&m, &m, 0.5).unwrap();
     assert_eq!(names(p.with_stiffness(StiffnessFactor::Custom(0.0)).unwrap_err()), "stiffness factor k");
     assert_eq!(names(p.with_min_approach_speed(-1.0).unwrap_err()), "min_approach_speed");
+    for m_t in [0.0, -1.0, f64::NAN] {
+        assert_eq!(names(p.with_tangential_mass(m_t).unwrap_err()), "tangential_mass");
+    }
 }
 
 #[test]

@@ -541,3 +541,62 @@ fn exact_polyhedron_enlargement_moves_the_faces_out_sharp_vertices_included() {
         assert!((g.contact_point - expected).length() < 1e-9, "point {:?} vs {expected:?}", g.contact_point);
     }
 }
+
+/// A 10 cm sphere pressed 0.1 mm into the floor, at rest, moved sideways by `shift` each
+/// evaluation (`steps` of them) under the tangential spring (μ_s = 0.5, μ_k = 0.3), the pair
+/// placed by `rotation`; returns the tangential force on the sphere after each (in the pair's
+/// frame, `A`↔`B` swapped when `swap`) and the last normal force.
+fn spring_sequence(shift: Vector, rotation: Rotation, steps: usize, swap: bool) -> (Vec<Vector>, f64) {
+    let ball = ConvexShape::ball(0.1).unwrap();
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    let m = Material::new(1e8, 0.3).unwrap();
+    let params = PairParameters::new(&m, &m, 0.8).unwrap().with_friction(Friction::new(0.5, 0.3, 1e-3).unwrap()).with_tangential_law(TangentialLaw::Spring);
+    let model = ContactModel::new(params, settings(8, IntegrationMode::Subcell));
+    let frame = Pose::from_parts(Vector::new(0.3, -0.2, 0.7), rotation);
+    let mut state = None;
+    let mut forces = vec![];
+    let mut normal = 0.0;
+    for k in 0..steps {
+        let a = BodyState::at_rest(&ball, frame * Pose::from_translation(Vector::new(0.0, 0.0999, 0.0) + shift * k as f64));
+        let b = BodyState::at_rest(&floor, frame);
+        let out = if swap { model.evaluate(&b, &a, &mut state) } else { model.evaluate(&a, &b, &mut state) };
+        let f = out.unwrap().expect("overlap").force;
+        let on_ball = frame.rotation.inverse() * if swap { f.force_on_b() } else { f.force_on_a };
+        forces.push(on_ball - Vector::Y * on_ball.y);
+        normal = f.normal_force;
+    }
+    (forces, normal)
+}
+
+#[test]
+fn the_tangential_spring_sticks_below_mu_s_then_slides_at_mu_k() {
+    let (f, f_n) = spring_sequence(Vector::new(3e-7, 0.0, 0.0), Rotation::IDENTITY, 400, false);
+    let x: Vec<f64> = f.iter().map(|v| v.x).collect();
+    // Sticking: the spring pulls the sphere back, linearly in the displacement, at Mindlin's
+    // stiffness κ 1.5 F_n/d (κ = 2(1 − ν)/(2 − ν), d = 0.1 mm).
+    assert!(x[0].abs() < 1e-5 * f_n && x[1] < 0.0);
+    let k_t = -x[10] / (10.0 * 3e-7);
+    let mindlin = 2.0 * 0.7 / 1.7 * 1.5 * f_n / 1e-4;
+    assert!((k_t / mindlin - 1.0).abs() < 0.05, "k_t = {k_t}, Mindlin {mindlin}");
+    // The hold never exceeds μ_s F_n; past it the contact slides at μ_k F_n and stays there.
+    let peak = x.iter().fold(0.0f64, |m, v| m.max(-v));
+    assert!(peak <= 0.5 * f_n * (1.0 + 1e-9) && peak > 0.45 * f_n, "peak {peak}, μ_s F_n {}", 0.5 * f_n);
+    // (To the grid normal's tilt, a few 1e-6 rad here.)
+    assert_relative_eq!(-x[399], 0.3 * f_n, max_relative = 1e-4);
+    assert!(f.iter().all(|v| v.z.abs() < 1e-4 * f_n), "sideways force");
+}
+
+#[test]
+fn the_tangential_spring_is_symmetric_and_moves_rigidly_with_the_pair() {
+    // Equal and opposite whichever body is A, and the same in any placement of the pair.
+    let shift = Vector::new(1e-7, 0.0, 4e-8);
+    let (plain, _) = spring_sequence(shift, Rotation::IDENTITY, 200, false);
+    let (swapped, _) = spring_sequence(shift, Rotation::IDENTITY, 200, true);
+    let (turned, _) = spring_sequence(shift, Rotation::from_scaled_axis(Vector::new(0.4, -1.1, 0.7)), 200, false);
+    // A persistent contact keeps its grid in the frame it chose, so the two orders and the
+    // rotated pair integrate on different grids: they agree to the grid's resolution.
+    let scale = plain.iter().map(|v| v.length()).fold(0.0, f64::max);
+    let worst = |other: &[Vector]| (0..200).map(|k| (plain[k] - other[k]).length() / scale).fold(0.0, f64::max);
+    let (ab, rigid) = (worst(&swapped), worst(&turned));
+    assert!(ab < 1e-4 && rigid < 1e-4, "A↔B differ by {ab:e}, rotated by {rigid:e} of the largest force");
+}

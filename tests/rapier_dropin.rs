@@ -95,8 +95,9 @@ fn stability_cases_end_right_or_are_refused() {
     }
 }
 
-/// A step's contacts are evaluated in parallel and summed in a fixed order: the drop_in scene
-/// ends bit-identical on one thread and on two.
+/// A step's contacts are evaluated in parallel and summed in a fixed order: the drop_in scene,
+/// with friction through the tangential spring and its per-contact history, ends bit-identical
+/// on one thread and on two.
 #[test]
 fn contact_forces_do_not_depend_on_the_thread_count() {
     use discrete_contact::validation::drop_in::bin_scene;
@@ -107,7 +108,8 @@ fn contact_forces_do_not_depend_on_the_thread_count() {
             let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
                 .unwrap()
                 .with_substeps_per_contact(6.0)
-                .unwrap();
+                .unwrap()
+                .with_friction(discrete_contact::Friction::new(0.5, 0.4, 0.01).unwrap());
             contacts.handle_all(&mut scene.world, Material::new(5e6, 0.4).unwrap()).unwrap();
             let mut touched = 0;
             for _ in 0..60 {

@@ -29,6 +29,7 @@ use crate::math::{Pose, Real, Rotation, Vector};
 use crate::overlap::{IntegrationMode, OverlapSettings};
 use crate::periodic::PeriodicBox;
 use crate::rapier::{DiscreteContacts, StepPolicy};
+use crate::tangential::TangentialLaw;
 use hlbm::correlations::{garside_al_dibouni_exponent, richardson_zaki_exponent, schiller_naumann_terminal_velocity};
 
 /// Standard gravity (m/s²).
@@ -466,6 +467,8 @@ impl SettlingRun {
             let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?.with_closed_form_spheres(case.closed_form_spheres).with_exact_polyhedra(case.exact_polyhedra);
             let mut c = DiscreteContacts::new(overlap, case.restitution)?
                 .with_friction(case.friction)
+                // The seed's friction law, for the comparison with its runs.
+                .with_tangential_law(TangentialLaw::SlipSpeed)
                 .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 })
                 .with_substeps_per_contact(case.substeps_per_contact)?
                 // E = 5 kPa: a head-on collision at the settling speed indents ~30 % of D (Hertz).
