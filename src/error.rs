@@ -48,8 +48,8 @@ pub enum Error {
         dt: Real,
         /// The largest safe (sub-)step (s).
         recommended: Real,
-        /// The contact time that sets it (s): Hertz's, or the tangential spring's when that is
-        /// shorter than what the sub-steps per contact allow for.
+        /// The contact time that sets it (s): Hertz's, or the half-period of a live contact's
+        /// own or its tangential spring's oscillation when that sets a shorter step.
         contact_time: Real,
         /// Sub-steps per step that would resolve it.
         substeps_needed: usize,

@@ -126,6 +126,7 @@ pub fn contact_force_with_history(
     let v_n = v_ab.dot(n);
     let approach_speed = -v_n;
     let f_el = elastic_force(params, geometry);
+    let k_n = normal_stiffness(f_el, geometry);
     let f_n = (f_el * (1.0 + damping * approach_speed)).max(0.0);
     let mut force = n * f_n;
     let mut f_t = 0.0;
@@ -141,7 +142,7 @@ pub fn contact_force_with_history(
                 }
             }
             TangentialLaw::Spring => {
-                let k_t = params.tangential_stiffness_ratio * normal_stiffness(f_el, geometry);
+                let k_t = params.tangential_stiffness_ratio * k_n;
                 let eta_t = tangential::damping(params, k_t, damping, f_el);
                 spring = tangential::spring_force(&params.friction, k_t, eta_t, f_n, carried, v_t, was_sliding);
                 force += spring.force_on_a;
@@ -156,7 +157,7 @@ pub fn contact_force_with_history(
         normal_force: f_n,
         tangential_force: f_t,
         approach_speed,
-        stiffness: normal_stiffness(f_el, geometry),
+        stiffness: k_n,
     };
     (contact, spring)
 }

@@ -58,8 +58,9 @@
 //! - [`Error::UnboundedOverlap`] — both bodies unbounded (two half-spaces); such a pair has no
 //!   contact to compute.
 //! - [`Error::TimeStepTooLarge`] — (rapier drop-in) a step cannot give a contact 30 sub-steps
-//!   (or the number set with `with_substeps_per_contact`) within its Hertz contact time (and
-//!   the tangential spring at least 5 within its own) under the chosen policy; the message names the pair, the
+//!   (or the number set with `with_substeps_per_contact`) within its Hertz contact time, or
+//!   too few within a live contact's own or its tangential spring's half-period (see
+//!   `DiscreteContacts::substeps`), under the chosen policy; the message names the pair, the
 //!   recommended step and the sub-steps needed. Lower `dt` or allow more sub-steps.
 //! - [`Error::ContactTooSoft`] — (rapier drop-in) Hertz puts an impact's indentation beyond
 //!   the limit (half the smaller body's smallest half-extent by default): the bodies would

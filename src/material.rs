@@ -238,7 +238,7 @@ impl PairParameters {
     /// With the pair's effective tangential mass `m_t > 0` (kg; infinite for two bodies that do
     /// not move): the tangential spring is then damped to the restitution's damping ratio.
     pub fn with_tangential_mass(mut self, m_t: Real) -> Result<Self> {
-        if !(m_t > 0.0) || m_t.is_nan() {
+        if !(m_t > 0.0) {
             return Err(Error::InvalidParameter { name: "tangential_mass", value: m_t, allowed: "> 0 (kg), infinite allowed" });
         }
         self.tangential_mass = Some(m_t);

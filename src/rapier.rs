@@ -419,6 +419,12 @@ impl DiscreteContacts {
         1.0 / rb.mass() + rotation
     }
 
+    /// The pair's effective mass against a tangential load at the contact, `1/Σ(1/m + r²/I_min)`
+    /// (kg); infinite when neither body moves, zero while a mass is not yet computed.
+    fn tangential_mass(world: &PhysicsWorld, (ca, ha): (ColliderHandle, &Handled), (cb, hb): (ColliderHandle, &Handled)) -> Real {
+        1.0 / (Self::tangential_compliance(world, ca, ha.radius) + Self::tangential_compliance(world, cb, hb.radius))
+    }
+
     fn params(&self, a: &Handled, b: &Handled) -> Result<PairParameters> {
         PairParameters::new(&a.material, &b.material, self.restitution)?
             .with_friction(self.friction)
@@ -452,7 +458,7 @@ impl DiscreteContacts {
             }
             // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
             // not computed yet (zero before its first step) leaves it unknown.
-            let m_t = 1.0 / (Self::tangential_compliance(w, ca, ha.radius) + Self::tangential_compliance(w, cb, hb.radius));
+            let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
             let params = if m_t > 0.0 { this.params(ha, hb)?.with_tangential_mass(m_t)? } else { this.params(ha, hb)? };
             let model = ContactModel::new(params, this.settings);
             let mut state = this.states.get(&(ca, cb)).copied();
@@ -669,16 +675,16 @@ impl DiscreteContacts {
                     limit = (t / per_half_period, t);
                 }
             };
-            let kappa = stiffness_ratio(&ha.material, &hb.material);
-            let m_t = 1.0 / (Self::tangential_compliance(world, ca, ha.radius) + Self::tangential_compliance(world, cb, hb.radius));
-            if spring {
+            // The spring's stiffness ratio and tangential mass.
+            let tangential = spring.then(|| (stiffness_ratio(&ha.material, &hb.material), Self::tangential_mass(world, (ca, ha), (cb, hb))));
+            if let Some((kappa, m_t)) = tangential {
                 resolve(t_h * (m_t / (kappa * m_star)).sqrt());
             }
             // A live contact may be far stiffer than Hertz's sphere of the bounding radii (a face
             // on a face): its own stiffness's half-periods, normal and tangential, count too.
             if let Some(k_n) = self.contact(ca, cb).map(|s| s.normal_stiffness).filter(|k| *k > 0.0) {
                 resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
-                if spring {
+                if let Some((kappa, m_t)) = tangential {
                     resolve(core::f64::consts::PI * (m_t / (kappa * k_n)).sqrt());
                 }
             }
