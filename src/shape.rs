@@ -82,6 +82,15 @@ pub trait Sdf: Send + Sync {
     fn half_space_normal(&self) -> Option<Vector> {
         None
     }
+
+    /// Whether the surface may have edges or corners. `true` (the default) unless it is smooth
+    /// (a ball, a capsule) or flat (a half-space); `false` lets the sub-cell grid skip its test
+    /// for cells an edge or a corner passes through, which then integrate better by the
+    /// body's tangent planes than by interpolation (see
+    /// [`IntegrationMode::Subcell`](crate::IntegrationMode::Subcell)).
+    fn has_edges(&self) -> bool {
+        true
+    }
 }
 
 /// The sphere through the corners of `b` (`(centre, radius)`); radius infinite for an
@@ -242,7 +251,9 @@ impl PolyhedronSdf {
                     .unwrap()
             };
             if d < out.0 {
-                out = (d, if d > 0.0 { (p - q) / d } else { *n });
+                // Within round-off of an edge, `p − q` has no direction: the face's normal is
+                // then as good a (sub)gradient there.
+                out = (d, if d > 1e-9 * (self.bounds.maxs - self.bounds.mins).max_element() { (p - q) / d } else { *n });
             }
         }
         out
@@ -672,6 +683,10 @@ impl Sdf for ConvexShape {
             Self::HalfSpace { normal } => Some(*normal),
             _ => None,
         }
+    }
+
+    fn has_edges(&self) -> bool {
+        !matches!(self, Self::Ball { .. } | Self::Capsule { .. } | Self::HalfSpace { .. })
     }
 
     fn face_planes(&self) -> Option<Vec<(Vector, Real)>> {

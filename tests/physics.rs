@@ -400,6 +400,9 @@ fn exact_polyhedra_take_a_user_sdfs_planes_at_any_scale_and_refuse_zero_ones_to_
         fn distance(&self, p: Vector) -> f64 {
             self.cube.distance(p)
         }
+        fn gradient(&self, p: Vector) -> Vector {
+            self.cube.gradient(p)
+        }
         fn local_bounds(&self) -> Aabb {
             self.cube.local_bounds()
         }

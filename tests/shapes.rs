@@ -115,9 +115,11 @@ fn half_space_and_custom_sdfs() {
     )
     .unwrap();
     let ball = ConvexShape::ball(0.3).unwrap();
-    // The same contact from a closure and from the built-in ball: the closure's surface
-    // crossings come from root finding (rim edges to 1e-3 of an edge), the ball's in closed
-    // form, so they agree to that tolerance's effect (measured 2.8e-5).
+    // The same contact from a closure and from the built-in ball, against the exact cap. The
+    // closure may have edges for all the grid knows (`Sdf::has_edges`), so its cells the
+    // sphere's curvature bends are clipped by tangent planes (an outer bound), the ball's are
+    // interpolated (an inner one): both within the N_c = 8 grid's error of the cap's volume
+    // (measured +0.57 % and −1.29 %), on either side of it, both normals within 1e-4 of the floor's.
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let m = Material::new(1e9, 0.3).unwrap();
     let model = ContactModel::new(PairParameters::new(&m, &m, 0.9).unwrap(), OverlapSettings::new(8, IntegrationMode::Subcell).unwrap());
@@ -125,8 +127,12 @@ fn half_space_and_custom_sdfs() {
     let w = BodyState::at_rest(&floor, Pose::IDENTITY);
     let a = model.evaluate(&BodyState::at_rest(&custom, pose), &w, &mut None).unwrap().unwrap();
     let b = model.evaluate(&BodyState::at_rest(&ball, pose), &w, &mut None).unwrap().unwrap();
-    let rel = (a.force.force_on_a - b.force.force_on_a).length() / b.force.force_on_a.length();
-    assert!(rel < 1e-4, "relative difference {rel:e}");
+    let d: f64 = 0.01;
+    let cap = std::f64::consts::PI * d * d * (3.0 * 0.3 - d) / 3.0;
+    let (ea, eb) = (a.geometry.volume / cap - 1.0, b.geometry.volume / cap - 1.0);
+    assert!(ea > 0.0 && ea < 0.01 && eb < 0.0 && eb > -0.015, "closure {ea:+e}, ball {eb:+e} against the cap");
+    let tilt = [a.geometry.normal, b.geometry.normal].map(|n| (n - Vector::Y).length());
+    assert!(tilt[0] < 1e-4 && tilt[1] < 1e-4, "normals tilted by {tilt:?}");
 }
 
 #[test]

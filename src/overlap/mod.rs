@@ -12,21 +12,28 @@
 //!   count grid nodes inside both bodies, average node positions, area-weighted surface-layer
 //!   gradients for the normal. Order 1.
 //! - [`Subcell`](IntegrationMode::Subcell) — ours: surface crossings on the cut grid edges by
-//!   root finding, each cut cell's six tetrahedra clipped by both surfaces; volume, centroid and
-//!   facet area vectors (the normal) in closed form. Order 2.
+//!   root finding, each cut cell's six tetrahedra clipped by both surfaces — or, in a cell an
+//!   edge or a corner of a body passes through, the cell clipped by both bodies' tangent
+//!   planes (`crease`); volume, centroid and facet area vectors (the normal) in closed form.
+//!   Order 2.
 //!
-//! Both find the overlap's box the same way (see `find_box`): axis rays that cannot step over
-//! a thin overlap, refinement while the hits fill a small part of the searched box, and a
-//! located seed when every ray misses.
+//! Counting finds the overlap's box by `find_box`: axis rays that cannot step over a thin
+//! overlap, refinement while the hits fill a small part of the searched box, and a located
+//! seed when every ray misses. Sub-cell mode bounds a first touch by cutting planes (`bound`):
+//! a box that provably holds all of it — thin wedges' tapering ends included, wherever they
+//! lie between grid lines — and proves the bodies apart when it empties; a persistent contact
+//! follows its last box.
 //!
 //! Two opt-in exact forms skip the grid for the pairs they cover — what the grid converges to
 //! as `N_c` grows: sphere lenses and caps ([`OverlapSettings::with_closed_form_spheres`]) and
 //! clipped polyhedra for cuboids, convex polyhedra and half-spaces
 //! ([`OverlapSettings::with_exact_polyhedra`]).
 
+mod bound;
 mod closed_form;
 mod count;
 mod correction;
+mod crease;
 mod polyhedra;
 mod subcell;
 
@@ -42,7 +49,10 @@ use crate::shape::Sdf;
 pub enum IntegrationMode {
     /// Node counting, as in seed 000 (first order in `N_c`).
     Count,
-    /// Piecewise-linear sub-cell integration (second order in `N_c`).
+    /// Piecewise-linear sub-cell integration (second order in `N_c`): exact surface crossings
+    /// on the grid's edges, and the bodies' tangent planes in cells an edge or a corner of a
+    /// body passes through, which keep flat-faced bodies' edges sharp. Relies on exact SDFs
+    /// and their gradients (as [`Sdf`] requires).
     Subcell,
 }
 
@@ -165,6 +175,11 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
 
     fn gradient(&self, x: Vector) -> Vector {
         self.rot * self.shape.gradient(self.rot_t * (x - self.origin))
+    }
+
+    /// [`Sdf::has_edges`] of the shape.
+    fn has_edges(&self) -> bool {
+        self.shape.has_edges()
     }
 
     /// The shape's closed-form crossing of the segment from `inside` to `outside`, as the
@@ -479,6 +494,18 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let search = |seed: &Aabb| {
         find_box(&pair, seed, &rough, settings.n_c, settings.mode).and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings))
     };
+    if settings.mode == IntegrationMode::Subcell {
+        // A persistent contact follows its last box; a first touch (or a contact that moved
+        // by more than a cell) is integrated on the cutting-plane box that holds all of the
+        // overlap (`bound`), which also proves the bodies apart. The rays' search from the
+        // rough box decides only what that grid finds nothing in: an overlap far thinner than
+        // the box is tight, such as a touch 1e-18 m deep.
+        if followed.is_some() {
+            return Ok(followed.map(to_world));
+        }
+        let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else { return Ok(None) };
+        return Ok(first_touch(&pair, &bounds, &rough, settings).or_else(|| search(&rough)).map(to_world));
+    }
     // Last sub-step's box may be far too small for this one — a contact that began with an
     // overlap of 1e-18 m and is 1 µm deep a sub-step later: then a fresh search from the rough
     // box decides (it also runs once when a contact ends).
@@ -628,6 +655,21 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         }
     };
     finish(pair, integral, &grid, rough, *corrected)
+}
+
+/// A first sub-cell touch: the grid on `bounds` (the cutting-plane box that holds the whole
+/// overlap), then again on the box of the pieces it found — a quarter cell larger, as a
+/// searched box is: the pieces' box is tight where `bounds` is loose (a lens's rim), so the
+/// second grid is the finer one; its nodes do not lie on the pieces' extreme faces (a flat
+/// face there would lie on a node layer, where which cell's facet counts is decided by
+/// round-off).
+fn first_touch<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, bounds: &Aabb, rough: &Aabb, settings: &OverlapSettings) -> Option<OverlapGeometry> {
+    let grid = Grid::on(bounds, settings.n_c)?;
+    let pad = grid.h * 0.25;
+    let padded = Grid::on(&Aabb::new(bounds.mins - pad, bounds.maxs + pad), settings.n_c)?;
+    let integral = subcell::integrate(pair, &padded, &padded.sample(pair));
+    let pieces = integral.bounds?;
+    overlap_in_box(pair, &pieces, rough, settings).or_else(|| finish(pair, integral, &grid, rough, pieces))
 }
 
 /// A persistent sub-cell contact without a box search: last sub-step's box of the overlap's

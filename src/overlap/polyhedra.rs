@@ -26,8 +26,8 @@ use crate::shape::Sdf;
 
 /// A face of the clipped polyhedron: its vertices (ordered around its plane's normal), its
 /// plane `n·x <= h` and the body it lies on (`None`: the starting box).
-struct Face {
-    verts: Vec<Vector>,
+pub(super) struct Face {
+    pub(super) verts: Vec<Vector>,
     normal: Vector,
     body: Option<usize>,
 }
@@ -58,7 +58,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         for _ in 0..4 {
             let mut faces = start_box(rough.mins - Vector::splat(pad), rough.maxs + Vector::splat(pad));
             for &(n, h, body) in &planes {
-                faces = clip(faces, n, h, body, tol);
+                clip(&mut faces, n, h, body, tol);
                 if faces.is_empty() {
                     return Some(None);
                 }
@@ -134,7 +134,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 }
 
 /// The six faces of the box `lo`–`hi`.
-fn start_box(lo: Vector, hi: Vector) -> Vec<Face> {
+pub(super) fn start_box(lo: Vector, hi: Vector) -> Vec<Face> {
     let corner = |c: usize| {
         Vector::new(
             if c & 1 == 0 { lo.x } else { hi.x },
@@ -146,13 +146,14 @@ fn start_box(lo: Vector, hi: Vector) -> Vec<Face> {
     for axis in 0..3 {
         for side in 0..2 {
             let bit = 1 << axis;
-            let verts: Vec<Vector> = (0..8)
+            let mut verts: Vec<Vector> = (0..8)
                 .filter(|c| (c & bit != 0) == (side == 1))
                 .map(corner)
                 .collect();
             let normal = Vector::AXES[axis] * if side == 1 { 1.0 } else { -1.0 };
+            order_around(&mut verts, normal);
             faces.push(Face {
-                verts: around(verts, normal),
+                verts,
                 normal,
                 body: None,
             });
@@ -162,8 +163,9 @@ fn start_box(lo: Vector, hi: Vector) -> Vec<Face> {
 }
 
 /// Keeps the part of the polyhedron with `n·x <= h` and closes it with a face of `body` on the
-/// plane. Points within `tol` of the plane count as on it.
-fn clip(faces: Vec<Face>, n: Vector, h: Real, body: usize, tol: Real) -> Vec<Face> {
+/// plane, in place (the faces' vertex buffers are reused). Points within `tol` of the plane
+/// count as on it.
+pub(super) fn clip(faces: &mut Vec<Face>, n: Vector, h: Real, body: usize, tol: Real) {
     let side = |x: Vector| {
         let s = n.dot(x) - h;
         if s.abs() <= tol {
@@ -176,13 +178,13 @@ fn clip(faces: Vec<Face>, n: Vector, h: Real, body: usize, tol: Real) -> Vec<Fac
         .iter()
         .all(|f| f.verts.iter().all(|&v| side(v) <= 0.0))
     {
-        return faces;
+        return;
     }
     let mut cap: Vec<Vector> = Vec::new();
-    let mut out = Vec::with_capacity(faces.len() + 1);
-    for f in faces {
+    let mut kept: Vec<Vector> = Vec::new();
+    faces.retain_mut(|f| {
         let m = f.verts.len();
-        let mut kept = Vec::with_capacity(m + 1);
+        kept.clear();
         for i in 0..m {
             let (p, q) = (f.verts[i], f.verts[(i + 1) % m]);
             let (sp, sq) = (side(p), side(q));
@@ -199,33 +201,57 @@ fn clip(faces: Vec<Face>, n: Vector, h: Real, body: usize, tol: Real) -> Vec<Fac
             }
         }
         if kept.len() >= 3 {
-            out.push(Face { verts: kept, ..f });
+            std::mem::swap(&mut f.verts, &mut kept);
+            true
+        } else {
+            false
         }
-    }
-    // The cap: the distinct points on the plane, ordered around it.
-    let mut distinct: Vec<Vector> = Vec::with_capacity(cap.len());
-    for p in cap {
-        if !distinct.iter().any(|q| (*q - p).length() <= 4.0 * tol) {
-            distinct.push(p);
-        }
-    }
-    if distinct.len() >= 3 && !out.is_empty() {
-        out.push(Face {
-            verts: around(distinct, n),
+    });
+    cap_polygon(&mut cap, n, tol);
+    let distinct = cap.len();
+    if distinct >= 3 && !faces.is_empty() {
+        faces.push(Face {
+            verts: cap,
             normal: n,
             body: Some(body),
         });
     }
-    out
 }
 
-/// The points of a convex polygon in the plane normal to `n`, ordered counter-clockwise
-/// about `n`.
-fn around(mut points: Vec<Vector>, n: Vector) -> Vec<Vector> {
+/// A cut's cap from the points the clipped faces left on the plane normal to `n`: the distinct
+/// ones (within `4 tol`), ordered counter-clockwise about `n`.
+pub(super) fn cap_polygon(points: &mut Vec<Vector>, n: Vector, tol: Real) {
+    let mut distinct = 0;
+    for i in 0..points.len() {
+        let p = points[i];
+        if !points[..distinct].iter().any(|q| (*q - p).length() <= 4.0 * tol) {
+            points[distinct] = p;
+            distinct += 1;
+        }
+    }
+    points.truncate(distinct);
+    if distinct >= 3 {
+        order_around(points, n);
+    }
+}
+
+/// Orders the points of a convex polygon in the plane normal to `n` counter-clockwise about
+/// `n`.
+fn order_around(points: &mut [Vector], n: Vector) {
     let c = points.iter().copied().sum::<Vector>() / points.len() as Real;
     let u = n.any_orthonormal_vector();
     let v = n.cross(u);
-    let angle = |p: &Vector| (*p - c).dot(v).atan2((*p - c).dot(u));
+    // A pseudo-angle: in the same order as `atan2(y, x)` on (−π, π], without the atan2.
+    let angle = |p: &Vector| {
+        let (x, y) = ((*p - c).dot(u), (*p - c).dot(v));
+        let r = y / (x.abs() + y.abs());
+        if x >= 0.0 {
+            r
+        } else if y >= 0.0 {
+            2.0 - r
+        } else {
+            -2.0 - r
+        }
+    };
     points.sort_by(|a, b| angle(a).total_cmp(&angle(b)));
-    points
 }

@@ -9,6 +9,13 @@
 //! first body's facet that meet there. Cells are classified by their corners' inside bits
 //! before any vertex is built.
 //!
+//! A cell that an edge or a corner of a body passes through is not interpolated: linear
+//! interpolation cuts the edge off (see [`crease`], which clips such cells by the bodies'
+//! tangent planes instead). Cells are told apart by the distance at their centre, and only for
+//! bodies that may have edges ([`Sdf::has_edges`]); for those, cells whose corners all lie
+//! outside a body but within a cell's diagonal of it are tested too — a corner may reach in
+//! between the nodes.
+//!
 //! Root finding instead of interpolating SDF values matters: inside a cylinder or a box the
 //! SDF has kinks (the nearest face changes), where interpolated values would misplace the
 //! surface by a large fraction of a cell. With exact crossings the error is
@@ -26,6 +33,7 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
+use super::crease::{self, Plane};
 use super::{blended_normal, crossing, Grid, Integral, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
@@ -51,6 +59,13 @@ const NO_KEY: u64 = u64::MAX;
 /// Tetrahedra cut by the other body within one cell share the second clip's crossings on the
 /// first clip's edges; at most this many are remembered per cell.
 const MEMO: usize = 48;
+
+/// Points per body whose tangent planes clip a bent cell: corners, centre, face centres.
+const SAMPLES: usize = 15;
+
+/// A cell is bent when the distance at its centre differs from its corners' mean by more
+/// than this fraction of its diagonal.
+const BENT: Real = 0.005;
 
 /// A vertex of a clipped piece: position, both distances, and a key naming the point within
 /// the evaluation — a grid node, or body `s`'s crossing of a grid edge — so that crossings on
@@ -180,6 +195,11 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     memo: [(u64, u64, usize, Vert); MEMO],
     memo_len: usize,
     sums: Sums,
+    /// Whether each body may have edges or corners ([`Sdf::has_edges`]): only then are cells
+    /// tested for being bent.
+    edges: [bool; 2],
+    /// Buffers of the tangent-plane clip, reused from cell to cell.
+    scratch: crease::Scratch,
 }
 
 /// Volume, moment, normal and bounds summed over the clipped pieces.
@@ -444,46 +464,40 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
     let n = grid.n;
     let m = n + 1;
     let h = grid.h;
-    let cell = h.x * h.y * h.z;
+    let diagonal = h.length();
     let unset = Vert { x: Vector::ZERO, d: [0.0; 2], key: NO_KEY };
     let inf = Vector::splat(Real::INFINITY);
     let sums = Sums { volume: 0.0, moment: Vector::ZERO, normal: [Vector::ZERO; 2], area: [0.0; 2], lo: inf, hi: -inf };
-    let mut cutter = Cutter { pair, cache: EdgeCache::new(values.len(), m), need_other: true, memo: [(0, 0, 0, unset); MEMO], memo_len: 0, sums };
+    let mut cutter = Cutter { pair, cache: EdgeCache::new(values.len(), m), need_other: true, memo: [(0, 0, 0, unset); MEMO], memo_len: 0, sums, edges: [pair.a.has_edges(), pair.b.has_edges()], scratch: crease::Scratch::new() };
+    let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
+    let edges = cutter.edges;
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
                 // Classify by the corners' inside bits before building any vertex: most cells
                 // of a box lie wholly outside one body.
                 let base = grid.index(i, j, k);
-                let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
-                let (mut in_a, mut in_b) = (0u8, 0u8);
-                for (c, off) in offsets.iter().enumerate() {
+                let (mut near_a, mut near_b) = (Real::INFINITY, Real::INFINITY);
+                for off in offsets {
                     let (da, db) = values[base + off];
-                    in_a |= ((da <= 0.0) as u8) << c;
-                    in_b |= ((db <= 0.0) as u8) << c;
+                    near_a = near_a.min(da);
+                    near_b = near_b.min(db);
                 }
-                if in_a == 0 || in_b == 0 {
+                // A body reaches into a cell when a corner lies inside it — or, for a body with
+                // edges, when a corner lies within the cell's diagonal: an edge or a corner may
+                // reach between the nodes.
+                let reach = |s: usize, near: Real| near <= if edges[s] { diagonal } else { 0.0 };
+                if !(reach(0, near_a) && reach(1, near_b)) {
                     continue;
                 }
                 let origin = grid.node(i, j, k);
-                if in_a == 0xFF && in_b == 0xFF {
-                    let it = &mut cutter.sums;
-                    it.volume += cell;
-                    it.moment += (origin + h * 0.5) * cell;
-                    it.lo = it.lo.min(origin);
-                    it.hi = it.hi.max(origin + h);
-                    continue;
-                }
                 let corners: [Vert; 8] = core::array::from_fn(|c| {
                     let node = base + offsets[c];
                     let (da, db) = values[node];
-                    let x = origin + h * Vector::new((c & 1) as Real, ((c >> 1) & 1) as Real, ((c >> 2) & 1) as Real);
-                    Vert { x, d: [da, db], key: Vert::node_key(node as u32) }
+                    Vert { x: origin + h * corner(c), d: [da, db], key: Vert::node_key(node as u32) }
                 });
                 cutter.memo_len = 0;
-                for tet in TETS {
-                    cutter.tet(&tet.map(|c| corners[c]));
-                }
+                cutter.cell(&corners, h);
             }
         }
     }
@@ -495,5 +509,109 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
         normal: blended_normal(it.normal, it.area),
         surface_area: it.area[0] + it.area[1],
         bounds: (it.volume > 0.0).then(|| Aabb::new(it.lo, it.hi)),
+    }
+}
+
+/// Corner `c` of the unit cell (bits: x = 1, y = 2, z = 4).
+#[inline]
+fn corner(c: usize) -> Vector {
+    Vector::new((c & 1) as Real, ((c >> 1) & 1) as Real, ((c >> 2) & 1) as Real)
+}
+
+impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
+    /// The overlap inside one cell of size `h` with corners `c`: whole when every corner lies
+    /// in both bodies; clipped by the bodies' tangent planes ([`crease`]) when a body's surface
+    /// is bent in it — an edge or a corner of the body passes through; else on its six
+    /// tetrahedra.
+    ///
+    /// A bent cell is told by the distance at its centre: for a flat surface it is the mean of
+    /// the corners' (the SDF is linear there), on a smooth one within `h²/R` of it, and an
+    /// edge or corner in the cell puts it a fraction of the cell's size below. The rule reads
+    /// both bodies alike (A↔B symmetry) and distances only (rigid-motion invariance).
+    fn cell(&mut self, c: &[Vert; 8], h: Vector) {
+        let (mut in_a, mut in_b) = (0u8, 0u8);
+        for (i, v) in c.iter().enumerate() {
+            in_a |= ((v.d[0] <= 0.0) as u8) << i;
+            in_b |= ((v.d[1] <= 0.0) as u8) << i;
+        }
+        if in_a == 0xFF && in_b == 0xFF {
+            let cell = h.x * h.y * h.z;
+            let it = &mut self.sums;
+            it.volume += cell;
+            it.moment += (c[0].x + h * 0.5) * cell;
+            it.lo = it.lo.min(c[0].x);
+            it.hi = it.hi.max(c[7].x);
+            return;
+        }
+        let centre = c[0].x + h * 0.5;
+        let tested = [self.edges[0] && in_a != 0xFF, self.edges[1] && in_b != 0xFF];
+        let (ca, cb) = if tested[0] || tested[1] { self.pair.both(centre) } else { (0.0, 0.0) };
+        let bent = |s: usize, d: Real| {
+            let mean = c.iter().map(|v| v.d[s]).sum::<Real>() / 8.0;
+            tested[s] && (mean - d).abs() > BENT * h.length()
+        };
+        if bent(0, ca) || bent(1, cb) {
+            let (mut planes, len) = self.tangent_planes(c, [in_a != 0xFF, in_b != 0xFF], [ca, cb]);
+            if let Some(k) = crease::clip_cell(c[0].x, c[7].x, &mut planes[..len], &mut self.scratch) {
+                let it = &mut self.sums;
+                if k.volume > 0.0 {
+                    it.volume += k.volume;
+                    it.moment += k.moment;
+                    it.lo = it.lo.min(k.lo);
+                    it.hi = it.hi.max(k.hi);
+                    for s in 0..2 {
+                        it.normal[s] += k.normal[s];
+                        it.area[s] += k.area[s];
+                    }
+                }
+                return;
+            }
+        }
+        if in_a == 0 || in_b == 0 {
+            return;
+        }
+        for tet in TETS {
+            self.tet(&tet.map(|i| c[i]));
+        }
+    }
+
+    /// The tangent planes of the bodies that do not hold the whole cell (`cut`) at its eight
+    /// corners, its centre (distances `centre`) and its six face centres: an edge through the
+    /// cell has points on each of its faces' sides among them, and a corner reaching in has
+    /// its faces' nearest points.
+    fn tangent_planes(&self, c: &[Vert; 8], cut: [bool; 2], centre: [Real; 2]) -> ([Plane; 2 * SAMPLES], usize) {
+        let mid = (c[0].x + c[7].x) * 0.5;
+        let mut points = [(mid, centre); SAMPLES];
+        for (i, v) in c.iter().enumerate() {
+            points[i] = (v.x, v.d);
+        }
+        for f in 0..6 {
+            let mut x = mid;
+            x[f % 3] = if f < 3 { c[0].x[f % 3] } else { c[7].x[f % 3] };
+            let (da, db) = self.pair.both(x);
+            points[9 + f] = (x, [da, db]);
+        }
+        let mut planes = [Plane { n: Vector::ZERO, h: 0.0, body: 0 }; 2 * SAMPLES];
+        let mut len = 0;
+        let tol = 1e-12 * (c[7].x - c[0].x).length();
+        for s in (0..2).filter(|&s| cut[s]) {
+            for &(x, d) in &points {
+                let g = if s == 0 { self.pair.a.gradient(x) } else { self.pair.b.gradient(x) };
+                // A user SDF's gradient may be a finite difference: the plane needs a unit normal.
+                let g = g.normalize_or_zero();
+                if !(g.is_finite() && g != Vector::ZERO) {
+                    continue;
+                }
+                // Only planes that cut the cell, each once per body (a flat face is seen from
+                // many points): the same set whichever body is called A.
+                let plane = Plane { n: g, h: g.dot(x) - d[s], body: s };
+                let same = |q: &Plane| q.body == s && (q.n - plane.n).length() <= 1e-12 && (q.h - plane.h).abs() <= tol;
+                if crease::cuts(&plane, c[0].x, c[7].x, tol) && !planes[..len].iter().any(same) {
+                    planes[len] = plane;
+                    len += 1;
+                }
+            }
+        }
+        (planes, len)
     }
 }
