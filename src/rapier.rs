@@ -111,6 +111,29 @@ struct Evaluated {
     state: ContactState,
 }
 
+/// A candidate pair last found apart: the exact distance's margin over the contact
+/// enlargement then (m) and both colliders' poses at that time.
+#[derive(Clone, Copy)]
+struct Gap {
+    margin: Real,
+    poses: (Pose, Pose),
+}
+
+/// What a pair's check on a sub-step found: a contact, and the gap to remember when the pair
+/// is apart.
+type Checked = (Option<Evaluated>, Option<Gap>);
+
+/// How far any point of collider `h` may have moved between poses `from` and `to` (m): the
+/// translation plus the chord of the rotation at the farthest point, `2 r sin(θ/2) <= 2 r
+/// |q_to − q_from|` (the quaternions' sign chosen nearer; no cancellation at small angles).
+/// Infinite for a half-space that turned.
+fn moved(h: &Handled, from: &Pose, to: &Pose) -> Real {
+    let (p, q) = (from.rotation, to.rotation);
+    let dq = if p.dot(q) >= 0.0 { (q - p).length() } else { (q + p).length() };
+    let turn = if dq > 0.0 { 2.0 * dq * (h.centre.length() + h.radius) } else { 0.0 };
+    (to.translation - from.translation).length() + turn
+}
+
 /// What a step did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepStats {
@@ -154,6 +177,10 @@ pub struct DiscreteContacts {
     substeps_per_contact: Real,
     handled: HashMap<ColliderHandle, Handled>,
     states: HashMap<(ColliderHandle, ColliderHandle), ContactState>,
+    /// Candidate pairs found apart, kept while they stay candidates: a pair that cannot have
+    /// closed its gap since needs no new distance (a cache; rebuilt by the exact distance).
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    gaps: HashMap<(ColliderHandle, ColliderHandle), Gap>,
     periodic: Option<PeriodicBox>,
     indentation_limit: Real,
     /// Bumped whenever the handled set changes.
@@ -219,6 +246,7 @@ impl DiscreteContacts {
             substeps_per_contact: SUBSTEPS_PER_CONTACT,
             handled: HashMap::new(),
             states: HashMap::new(),
+            gaps: HashMap::new(),
             periodic: None,
             indentation_limit: 0.5,
             generation: 0,
@@ -442,19 +470,28 @@ impl DiscreteContacts {
         let eps = self.settings.enlargement();
         let this = &*self;
         let w = &*world;
-        let evaluate = |&(ca, cb, shift): &Candidate| -> Result<Option<Evaluated>> {
+        let evaluate = |&(ca, cb, shift): &Candidate| -> Result<Checked> {
             let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
             let (pa, ka, ba, _) = Self::kinematics(w, ca);
             let (mut pb, mut kb, bb, _) = Self::kinematics(w, cb);
             // B's nearest image (periodic boxes); a rigid shift changes no force or torque.
             pb.translation += shift;
             kb.center_of_mass += shift;
-            // Parry's exact distance (GJK) rules out candidates that do not touch for a
-            // fraction of an evaluation's cost.
-            let apart = parry3d_f64::query::distance(&pa, w.colliders[ca].shape(), &pb, w.colliders[cb].shape())
-                .is_ok_and(|d| d.distance > eps[0] + eps[1]);
-            if apart {
-                return Ok(None);
+            // A live contact is evaluated (it ends there when the bodies part). Other pairs:
+            // parry's exact distance (GJK) rules out those that do not touch for a fraction of
+            // an evaluation's cost, and a pair found apart stays apart without one while the
+            // bodies have moved less than its margin.
+            if !this.states.contains_key(&(ca, cb)) {
+                if let Some(gap) = this.gaps.get(&(ca, cb)) {
+                    if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) < gap.margin {
+                        return Ok((None, Some(*gap)));
+                    }
+                }
+                let margin = parry3d_f64::query::distance(&pa, w.colliders[ca].shape(), &pb, w.colliders[cb].shape())
+                    .map_or(Real::NAN, |d| d.distance - (eps[0] + eps[1]));
+                if margin > 0.0 {
+                    return Ok((None, Some(Gap { margin, poses: (pa, pb) })));
+                }
             }
             // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
             // not computed yet (zero before its first step) leaves it unknown.
@@ -467,15 +504,15 @@ impl DiscreteContacts {
                 &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
                 &mut state,
             )?;
-            Ok(out.zip(state).map(|(out, state)| Evaluated { pair: (ca, cb), bodies: (ba, bb), out, state }))
+            Ok((out.zip(state).map(|(out, state)| Evaluated { pair: (ca, cb), bodies: (ba, bb), out, state }), None))
         };
         #[cfg(feature = "parallel")]
-        let evaluated: Vec<Result<Option<Evaluated>>> = {
+        let evaluated: Vec<Result<Checked>> = {
             use rayon::prelude::*;
             pairs.par_iter().map(evaluate).collect()
         };
         #[cfg(not(feature = "parallel"))]
-        let evaluated: Vec<Result<Option<Evaluated>>> = pairs.iter().map(evaluate).collect();
+        let evaluated: Vec<Result<Checked>> = pairs.iter().map(evaluate).collect();
 
         // Each body's sum runs in the candidates' order, whichever thread evaluated them.
         let mut alive = HashMap::with_capacity(self.states.len());
@@ -485,8 +522,13 @@ impl DiscreteContacts {
             e.0 += f;
             e.1 += t;
         };
-        for e in evaluated {
-            let Some(Evaluated { pair, bodies, out, state }) = e? else { continue };
+        let mut gaps = HashMap::with_capacity(self.gaps.len());
+        for (e, &(ca, cb, _)) in evaluated.into_iter().zip(&pairs) {
+            let (contact, gap) = e?;
+            if let Some(gap) = gap {
+                gaps.insert((ca, cb), gap);
+            }
+            let Some(Evaluated { pair, bodies, out, state }) = contact else { continue };
             alive.insert(pair, state);
             stats.max_indentation = stats.max_indentation.max(out.geometry.indentation);
             let f = out.force;
@@ -498,6 +540,7 @@ impl DiscreteContacts {
             }
         }
         self.states = alive;
+        self.gaps = gaps;
         let mut applied = Vec::with_capacity(added.len());
         for (h, (f, t)) in added {
             if let Some(rb) = world.bodies.get_mut(h) {
@@ -707,5 +750,39 @@ impl DiscreteContacts {
             return Err(Error::TimeStepTooLarge { dt, recommended, contact_time, substeps_needed: needed, pair });
         }
         Ok(chosen.max(needed))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Rotation;
+
+    /// The motion bound that lets a pair found apart skip its distance holds every point of the
+    /// body, for small turns (where a bound from the angle's cosine would round to zero) and
+    /// large ones (the quaternion's sign flipped), and is zero for a body that did not move.
+    #[test]
+    fn the_motion_bound_holds_every_point_of_the_body() {
+        let shape = ConvexShape::cuboid(Vector::new(0.03, 0.01, 0.02)).unwrap();
+        let (centre, radius) = shape.bounding_sphere();
+        let h = Handled { shape, material: Material::new(1e7, 0.3).unwrap(), centre, radius, half_size: 0.01 };
+        let from = Pose::from_parts(Vector::new(0.1, -0.2, 0.3), Rotation::from_axis_angle(Vector::new(1.0, 2.0, 2.0).normalize(), 0.7));
+        assert_eq!(moved(&h, &from, &from), 0.0);
+        let mut tightest: Real = 0.0;
+        for (k, angle) in [1e-9, 1e-4, 0.3, 3.0, 6.2].into_iter().enumerate() {
+            let axis = Vector::new(1.0, -(k as Real), 0.5).normalize();
+            let to = Pose::from_parts(from.translation + Vector::new(1e-3, 0.0, -2e-3) * k as Real, Rotation::from_axis_angle(axis, angle) * from.rotation);
+            let (to_neg, bound) = (Pose::from_parts(to.translation, -to.rotation), moved(&h, &from, &to));
+            assert_eq!(moved(&h, &from, &to_neg), bound, "the quaternion's sign must not matter");
+            // The corners of the box are its farthest points.
+            for c in 0..8 {
+                let x = Vector::new(if c & 1 == 0 { -0.03 } else { 0.03 }, if c & 2 == 0 { -0.01 } else { 0.01 }, if c & 4 == 0 { -0.02 } else { 0.02 });
+                let moved_by = (to.transform_point(x) - from.transform_point(x)).length();
+                assert!(moved_by <= bound * (1.0 + 1e-12), "angle {angle}: corner moved {moved_by:e} > bound {bound:e}");
+                tightest = tightest.max(moved_by / bound);
+            }
+        }
+        // Not vacuous: the corners come within a factor of three of the bound.
+        assert!(tightest > 0.3, "bound loose by {tightest}");
     }
 }

@@ -465,6 +465,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
     let m = n + 1;
     let h = grid.h;
     let diagonal = h.length();
+    let cell = h.x * h.y * h.z;
     let unset = Vert { x: Vector::ZERO, d: [0.0; 2], key: NO_KEY };
     let inf = Vector::splat(Real::INFINITY);
     let sums = Sums { volume: 0.0, moment: Vector::ZERO, normal: [Vector::ZERO; 2], area: [0.0; 2], lo: inf, hi: -inf };
@@ -478,10 +479,13 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
                 // of a box lie wholly outside one body.
                 let base = grid.index(i, j, k);
                 let (mut near_a, mut near_b) = (Real::INFINITY, Real::INFINITY);
-                for off in offsets {
+                let (mut in_a, mut in_b) = (0u8, 0u8);
+                for (c, off) in offsets.into_iter().enumerate() {
                     let (da, db) = values[base + off];
                     near_a = near_a.min(da);
                     near_b = near_b.min(db);
+                    in_a |= ((da <= 0.0) as u8) << c;
+                    in_b |= ((db <= 0.0) as u8) << c;
                 }
                 // A body reaches into a cell when a corner lies inside it — or, for a body with
                 // edges, when a corner lies within the cell's diagonal: an edge or a corner may
@@ -491,13 +495,21 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
                     continue;
                 }
                 let origin = grid.node(i, j, k);
+                if in_a == 0xFF && in_b == 0xFF {
+                    let it = &mut cutter.sums;
+                    it.volume += cell;
+                    it.moment += (origin + h * 0.5) * cell;
+                    it.lo = it.lo.min(origin);
+                    it.hi = it.hi.max(origin + h);
+                    continue;
+                }
                 let corners: [Vert; 8] = core::array::from_fn(|c| {
                     let node = base + offsets[c];
                     let (da, db) = values[node];
                     Vert { x: origin + h * corner(c), d: [da, db], key: Vert::node_key(node as u32) }
                 });
                 cutter.memo_len = 0;
-                cutter.cell(&corners, h);
+                cutter.cell(&corners, h, [in_a, in_b]);
             }
         }
     }
@@ -519,39 +531,35 @@ fn corner(c: usize) -> Vector {
 }
 
 impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
-    /// The overlap inside one cell of size `h` with corners `c`: whole when every corner lies
-    /// in both bodies; clipped by the bodies' tangent planes ([`crease`]) when a body's surface
-    /// is bent in it — an edge or a corner of the body passes through; else on its six
-    /// tetrahedra.
+    /// The overlap inside one cell of size `h` with corners `c`, not all in both bodies (the
+    /// last argument: each body's corner inside bits, bit `i` for corner `i`): clipped by the bodies' tangent planes ([`crease`])
+    /// when a body's surface is bent in it — an edge or a corner of the body passes through;
+    /// else on its six tetrahedra.
     ///
     /// A bent cell is told by the distance at its centre: for a flat surface it is the mean of
-    /// the corners' (the SDF is linear there), on a smooth one within `h²/R` of it, and an
-    /// edge or corner in the cell puts it a fraction of the cell's size below. The rule reads
-    /// both bodies alike (A↔B symmetry) and distances only (rigid-motion invariance).
-    fn cell(&mut self, c: &[Vert; 8], h: Vector) {
-        let (mut in_a, mut in_b) = (0u8, 0u8);
-        for (i, v) in c.iter().enumerate() {
-            in_a |= ((v.d[0] <= 0.0) as u8) << i;
-            in_b |= ((v.d[1] <= 0.0) as u8) << i;
-        }
-        if in_a == 0xFF && in_b == 0xFF {
-            let cell = h.x * h.y * h.z;
-            let it = &mut self.sums;
-            it.volume += cell;
-            it.moment += (c[0].x + h * 0.5) * cell;
-            it.lo = it.lo.min(c[0].x);
-            it.hi = it.hi.max(c[7].x);
-            return;
-        }
+    /// the corners' (the SDF is linear there), on a smooth one within `h²/R` of it, and an edge
+    /// or corner in the cell puts it a fraction of the cell's size below. The rule reads both bodies alike (A↔B symmetry) and distances only
+    /// (rigid-motion invariance). A body whose corners all lie outside and whose centre lies
+    /// farther than half the diagonal does not reach into the cell (the SDF is 1-Lipschitz).
+    fn cell(&mut self, c: &[Vert; 8], h: Vector, [in_a, in_b]: [u8; 2]) {
         let centre = c[0].x + h * 0.5;
+        let diagonal = h.length();
         let tested = [self.edges[0] && in_a != 0xFF, self.edges[1] && in_b != 0xFF];
         let (ca, cb) = if tested[0] || tested[1] { self.pair.both(centre) } else { (0.0, 0.0) };
+        if (tested[0] && in_a == 0 && ca > 0.5 * diagonal) || (tested[1] && in_b == 0 && cb > 0.5 * diagonal) {
+            return;
+        }
         let bent = |s: usize, d: Real| {
             let mean = c.iter().map(|v| v.d[s]).sum::<Real>() / 8.0;
-            tested[s] && (mean - d).abs() > BENT * h.length()
+            tested[s] && (mean - d).abs() > BENT * diagonal
         };
-        if bent(0, ca) || bent(1, cb) {
-            let (mut planes, len) = self.tangent_planes(c, [in_a != 0xFF, in_b != 0xFF], [ca, cb]);
+        let bends = [bent(0, ca), bent(1, cb)];
+        if (bends[0] || bends[1]) && !((in_a == 0 && !bends[0]) || (in_b == 0 && !bends[1])) {
+            // A bent body's surface by its planes at all samples; a body that holds only part of
+            // the cell but is not bent in it (a flat or gently curved face) by its plane at
+            // the centre, as good as interpolation there.
+            let samples = |s: usize, inside: u8| if inside == 0xFF { 0 } else if bends[s] { SAMPLES } else { 1 };
+            let (mut planes, len) = self.tangent_planes(c, [samples(0, in_a), samples(1, in_b)], [ca, cb]);
             if let Some(k) = crease::clip_cell(c[0].x, c[7].x, &mut planes[..len], &mut self.scratch) {
                 let it = &mut self.sums;
                 if k.volume > 0.0 {
@@ -575,27 +583,27 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
     }
 
-    /// The tangent planes of the bodies that do not hold the whole cell (`cut`) at its eight
-    /// corners, its centre (distances `centre`) and its six face centres: an edge through the
-    /// cell has points on each of its faces' sides among them, and a corner reaching in has
-    /// its faces' nearest points.
-    fn tangent_planes(&self, c: &[Vert; 8], cut: [bool; 2], centre: [Real; 2]) -> ([Plane; 2 * SAMPLES], usize) {
+    /// The tangent planes of each body at the first `samples` of the cell's centre (distances
+    /// `centre`), its eight corners and its six face centres: an edge through the cell has
+    /// points on each of its faces' sides among them, and a corner reaching in has its faces'
+    /// nearest points.
+    fn tangent_planes(&self, c: &[Vert; 8], samples: [usize; 2], centre: [Real; 2]) -> ([Plane; 2 * SAMPLES], usize) {
         let mid = (c[0].x + c[7].x) * 0.5;
         let mut points = [(mid, centre); SAMPLES];
         for (i, v) in c.iter().enumerate() {
-            points[i] = (v.x, v.d);
+            points[1 + i] = (v.x, v.d);
         }
         for f in 0..6 {
             let mut x = mid;
             x[f % 3] = if f < 3 { c[0].x[f % 3] } else { c[7].x[f % 3] };
-            let (da, db) = self.pair.both(x);
-            points[9 + f] = (x, [da, db]);
+            let d = |s: usize| if samples[s] == SAMPLES { self.distance(s, x) } else { Real::NAN };
+            points[9 + f] = (x, [d(0), d(1)]);
         }
         let mut planes = [Plane { n: Vector::ZERO, h: 0.0, body: 0 }; 2 * SAMPLES];
         let mut len = 0;
         let tol = 1e-12 * (c[7].x - c[0].x).length();
-        for s in (0..2).filter(|&s| cut[s]) {
-            for &(x, d) in &points {
+        for s in 0..2 {
+            for &(x, d) in &points[..samples[s]] {
                 let g = if s == 0 { self.pair.a.gradient(x) } else { self.pair.b.gradient(x) };
                 // A user SDF's gradient may be a finite difference: the plane needs a unit normal.
                 let g = g.normalize_or_zero();
