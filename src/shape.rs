@@ -220,25 +220,37 @@ impl PolyhedronSdf {
     /// Distance and outward gradient.
     fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
         let mut best = (Real::NEG_INFINITY, Vector::Y);
-        for (n, off) in &self.planes {
+        let mut face = 0;
+        for (k, (n, off)) in self.planes.iter().enumerate() {
             let s = n.dot(p) - off;
             if s > best.0 {
                 best = (s, *n);
+                face = k;
             }
         }
         if best.0 <= 0.0 {
             return best;
         }
-        // Outside: the nearest point lies on a face whose plane sees p.
+        // Outside, the distance is at least every plane's: when p projects into the face of
+        // the farthest plane, that projection is the nearest point.
+        let projects_into = |(n, off): &(Vector, Real), verts: &[Vector]| {
+            let proj = p - *n * (n.dot(p) - off);
+            let m = verts.len();
+            (proj, (0..m).all(|i| (verts[(i + 1) % m] - verts[i]).cross(proj - verts[i]).dot(*n) >= 0.0))
+        };
+        if projects_into(&self.planes[face], &self.faces[face]).1 {
+            return best;
+        }
+        // Else the nearest point lies on a face whose plane sees p.
         let mut out = (Real::INFINITY, best.1);
         for ((n, off), verts) in self.planes.iter().zip(&self.faces) {
             let s = n.dot(p) - off;
-            if s <= 0.0 {
+            // A face is no nearer than its plane.
+            if s <= 0.0 || s >= out.0 {
                 continue;
             }
-            let proj = p - *n * s;
+            let (proj, inside) = projects_into(&(*n, *off), verts);
             let m = verts.len();
-            let inside = (0..m).all(|i| (verts[(i + 1) % m] - verts[i]).cross(proj - verts[i]).dot(*n) >= 0.0);
             let (d, q) = if inside {
                 (s, proj)
             } else {

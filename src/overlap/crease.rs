@@ -59,12 +59,14 @@ struct Poly {
 pub(super) struct Scratch {
     polys: [Poly; 2],
     cap: Vec<Vector>,
+    /// Each vertex's signed distance from the plane being clipped.
+    sides: Vec<Real>,
 }
 
 impl Scratch {
     pub(super) fn new() -> Self {
         let poly = || Poly { verts: Vec::with_capacity(MAX_VERTS), faces: Vec::with_capacity(MAX_FACES) };
-        Self { polys: [poly(), poly()], cap: Vec::with_capacity(2 * MAX_FACES) }
+        Self { polys: [poly(), poly()], cap: Vec::with_capacity(2 * MAX_FACES), sides: Vec::with_capacity(MAX_VERTS) }
     }
 }
 
@@ -99,13 +101,13 @@ pub(super) fn clip_cell(lo: Vector, hi: Vector, planes: &mut [Plane], scratch: &
             .then(p.n.z.total_cmp(&q.n.z))
             .then(p.h.total_cmp(&q.h))
     });
-    let Scratch { polys, cap } = scratch;
+    let Scratch { polys, cap, sides } = scratch;
     let [mut cur, mut next] = [0usize, 1];
     cell_faces(lo, hi, &mut polys[cur]);
     for &p in planes.iter() {
         let (a, b) = polys.split_at_mut(1);
         let (from, to) = if cur == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) };
-        match clip(from, to, cap, p, tol)? {
+        match clip(from, to, cap, sides, p, tol)? {
             false => continue,
             true => std::mem::swap(&mut cur, &mut next),
         }
@@ -165,16 +167,17 @@ fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
 /// Writes into `to` the part of `from` with `n·x <= h`, closed by a face on the plane; returns
 /// `Some(false)` (and leaves `to` alone) when the plane cuts nothing off, `None` when the
 /// result would outgrow the buffers.
-fn clip(from: &Poly, to: &mut Poly, cap: &mut Vec<Vector>, plane: Plane, tol: Real) -> Option<bool> {
-    let side = |x: Vector| {
+fn clip(from: &Poly, to: &mut Poly, cap: &mut Vec<Vector>, sides: &mut Vec<Real>, plane: Plane, tol: Real) -> Option<bool> {
+    sides.clear();
+    sides.extend(from.verts.iter().map(|&x| {
         let s = plane.n.dot(x) - plane.h;
         if s.abs() <= tol {
             0.0
         } else {
             s
         }
-    };
-    if from.verts.iter().all(|&v| side(v) <= 0.0) {
+    }));
+    if sides.iter().all(|&s| s <= 0.0) {
         return Some(false);
     }
     to.verts.clear();
@@ -182,10 +185,10 @@ fn clip(from: &Poly, to: &mut Poly, cap: &mut Vec<Vector>, plane: Plane, tol: Re
     cap.clear();
     for f in &from.faces {
         let start = to.verts.len();
-        let p = &from.verts[f.start..f.start + f.len];
+        let (p, side) = (&from.verts[f.start..f.start + f.len], &sides[f.start..f.start + f.len]);
         for k in 0..p.len() {
-            let (a, b) = (p[k], p[(k + 1) % p.len()]);
-            let (sa, sb) = (side(a), side(b));
+            let next = if k + 1 == p.len() { 0 } else { k + 1 };
+            let (a, b, sa, sb) = (p[k], p[next], side[k], side[next]);
             if sa <= 0.0 {
                 to.verts.push(a);
                 if sa == 0.0 {

@@ -224,7 +224,7 @@ pub(super) fn cap_polygon(points: &mut Vec<Vector>, n: Vector, tol: Real) {
     let mut distinct = 0;
     for i in 0..points.len() {
         let p = points[i];
-        if !points[..distinct].iter().any(|q| (*q - p).length() <= 4.0 * tol) {
+        if !points[..distinct].iter().any(|q| (*q - p).length_squared() <= 16.0 * tol * tol) {
             points[distinct] = p;
             distinct += 1;
         }
@@ -253,5 +253,19 @@ fn order_around(points: &mut [Vector], n: Vector) {
             -2.0 - r
         }
     };
-    points.sort_by(|a, b| angle(a).total_cmp(&angle(b)));
+    // Each point's angle once, not once per comparison.
+    const KEYED: usize = 32;
+    if points.len() <= KEYED {
+        let mut keys = [(0.0, Vector::ZERO); KEYED];
+        for (k, p) in keys.iter_mut().zip(points.iter()) {
+            *k = (angle(p), *p);
+        }
+        let keys = &mut keys[..points.len()];
+        keys.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        for (p, k) in points.iter_mut().zip(keys.iter()) {
+            *p = k.1;
+        }
+    } else {
+        points.sort_by(|a, b| angle(a).total_cmp(&angle(b)));
+    }
 }
