@@ -325,6 +325,8 @@ impl DiscreteContacts {
         let half_size = if radius.is_finite() { (b.maxs - b.mins).min_element() * 0.5 } else { Real::INFINITY };
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
         self.handled.insert(collider, Handled { shape, material, centre, radius, half_size });
+        // A gap measured for another shape or size bounds nothing now.
+        self.gaps.clear();
         self.generation += 1;
         Ok(())
     }
