@@ -554,7 +554,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             tested[s] && (mean - d).abs() > BENT * diagonal
         };
         let bends = [bent(0, ca), bent(1, cb)];
-        if (bends[0] || bends[1]) && !((in_a == 0 && !bends[0]) || (in_b == 0 && !bends[1])) {
+        // A body with no corner inside reaches in only with an edge or a corner: bent.
+        let reaches = |s: usize, inside: u8| inside != 0 || bends[s];
+        if (bends[0] || bends[1]) && reaches(0, in_a) && reaches(1, in_b) {
             // A bent body's surface by its planes at all samples; a body that holds only part of
             // the cell but is not bent in it (a flat or gently curved face) by its plane at
             // the centre, as good as interpolation there.
