@@ -483,7 +483,8 @@ impl DiscreteContacts {
             // parry's exact distance (GJK) rules out those that do not touch for a fraction of
             // an evaluation's cost, and a pair found apart stays apart without one while the
             // bodies have moved less than its margin.
-            if !this.states.contains_key(&(ca, cb)) {
+            let mut state = this.states.get(&(ca, cb)).copied();
+            if state.is_none() {
                 if let Some(gap) = this.gaps.get(&(ca, cb)) {
                     if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) < gap.margin {
                         return Ok((None, Some(*gap)));
@@ -500,7 +501,6 @@ impl DiscreteContacts {
             let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
             let params = if m_t > 0.0 { this.params(ha, hb)?.with_tangential_mass(m_t)? } else { this.params(ha, hb)? };
             let model = ContactModel::new(params, this.settings);
-            let mut state = this.states.get(&(ca, cb)).copied();
             let out = model.evaluate(
                 &BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
                 &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },

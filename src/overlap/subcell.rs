@@ -532,14 +532,14 @@ fn corner(c: usize) -> Vector {
 
 impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     /// The overlap inside one cell of size `h` with corners `c`, not all in both bodies (the
-    /// last argument: each body's corner inside bits, bit `i` for corner `i`): clipped by the bodies' tangent planes ([`crease`])
-    /// when a body's surface is bent in it — an edge or a corner of the body passes through;
-    /// else on its six tetrahedra.
+    /// last argument: each body's corner inside bits, bit `i` for corner `i`): clipped by the
+    /// bodies' tangent planes ([`crease`]) when a body's surface is bent in it — an edge or a
+    /// corner of the body passes through; else on its six tetrahedra.
     ///
     /// A bent cell is told by the distance at its centre: for a flat surface it is the mean of
     /// the corners' (the SDF is linear there), on a smooth one within `h²/R` of it, and an edge
-    /// or corner in the cell puts it a fraction of the cell's size below. The rule reads both bodies alike (A↔B symmetry) and distances only
-    /// (rigid-motion invariance). A body whose corners all lie outside and whose centre lies
+    /// or corner in the cell puts it a fraction of the cell's size below. The rule reads both
+    /// bodies alike (A↔B symmetry) and distances only (rigid-motion invariance). A body whose corners all lie outside and whose centre lies
     /// farther than half the diagonal does not reach into the cell (the SDF is 1-Lipschitz).
     fn cell(&mut self, c: &[Vert; 8], h: Vector, [in_a, in_b]: [u8; 2]) {
         let centre = c[0].x + h * 0.5;
