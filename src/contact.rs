@@ -1,13 +1,27 @@
 //! Persistent contact state: a contact fixes its damping at first touch and carries its
-//! corrected box and its tangential spring's history from one sub-step to the next until the
-//! bodies part.
+//! corrected box, its tangential spring's history and its last full geometry from one sub-step
+//! to the next until the bodies part.
+//!
+//! **Geometry reuse.** Between two sub-steps a resting or slowly rolling contact moves far less
+//! than one cell of its overlap grid, yet a full evaluation integrates the whole grid again.
+//! A live contact therefore keeps its last full geometry in B's frame ([`Reference`]) and,
+//! while the pair's relative motion since then stays small against the indentation and the
+//! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead: the
+//! indentation by the approach along the normal, the volume along the overlap's own power law
+//! `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the secant of the
+//! last two full evaluations, or at first the shape measure the stiffness uses), the contact
+//! point as between two balls about the bodies' centres, the normal as the surfaces' own
+//! normals at the contact point turn. First touch, a
+//! contact whose update would part the bodies, and any motion beyond the bound get a full
+//! evaluation. The rule reads only the contact's state, so results do not depend on the
+//! thread count and a checkpoint resumes bit-identically.
 
 use parry3d_f64::bounding_volume::Aabb;
 
 use crate::error::Result;
 use crate::force::{contact_force_with_history, BodyKinematics, ContactForce};
 use crate::material::PairParameters;
-use crate::math::{Pose, Real};
+use crate::math::{Pose, Real, Rotation, Vector};
 use crate::overlap::{compute_overlap, OverlapGeometry, OverlapSettings};
 use crate::shape::Sdf;
 use crate::tangential::TangentialHistory;
@@ -57,6 +71,176 @@ pub struct ContactState {
     /// the live contact resolves.
     #[cfg_attr(feature = "checkpoint", serde(default))]
     pub normal_stiffness: Real,
+    /// The last full evaluation, while geometry reuse is on; `None` forces a full evaluation.
+    pub reference: Option<Reference>,
+}
+
+/// A full evaluation's geometry in B's body frame, with A's pose in that frame then: what the
+/// updates between full evaluations start from, and how far they may go.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+pub struct Reference {
+    /// A's body frame → B's body frame at the full evaluation.
+    pub relative: Pose,
+    /// Contact point (B's frame, m).
+    pub contact_point: Vector,
+    /// Unit normal from B to A (B's frame).
+    pub normal: Vector,
+    /// The bodies' distance gradients at the contact point, A's and B's (B's frame): an update
+    /// turns `normal` as `∇d_B − ∇d_A` turns, and counts their turn as tilt.
+    pub gradients: [Vector; 2],
+    /// Each body's centre on the normal through the contact point, at the distance of its
+    /// bounding sphere's centre (A's in A's frame, B's in B's frame); the distances, infinite
+    /// for an unbounded body (a half-space). An update moves the contact point as it would
+    /// move between two balls about these centres.
+    pub centres: [Vector; 2],
+    /// The distances of [`centres`](Self::centres) from the contact point (m).
+    pub radii: [Real; 2],
+    /// Volume (m³).
+    pub volume: Real,
+    /// Indentation (m).
+    pub indentation: Real,
+    /// Surface area (m²).
+    pub surface_area: Real,
+    /// Exponent `p` of the volume law `V ∝ d^p` the updates follow, within [1, 3].
+    pub exponent: Real,
+    /// The indentation's rate against the approach, `dd/dδ`, within [0.05, 1].
+    pub depth_rate: Real,
+    /// Farthest an overlap point may be from the contact point (m): the corrected box's
+    /// diagonal (the box holds the overlap and its centroid), the lever by which a relative
+    /// rotation changes the local indentation.
+    pub reach: Real,
+    /// The lever by which a relative rotation moves the contact point (m): the nearer body's
+    /// centre of mass (a body rolling on another), at least `reach`.
+    pub lever: Real,
+    /// The overlap grid's cell (m): the corrected box's longest side over `N_c`.
+    pub cell: Real,
+}
+
+impl Reference {
+    /// The geometry after A moved (relative to B) to `relative`, or `None` when the motion
+    /// exceeds the allowances of the reuse `fraction` (see
+    /// [`ContactModel::with_geometry_reuse`]) or would part the bodies.
+    fn update<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        shapes: (&A, &B),
+        relative: &Pose,
+        pose_b: &Pose,
+        corrected_box: Aabb,
+        fraction: Real,
+    ) -> Option<OverlapGeometry> {
+        let (deepening, shift, chord) = self.motion(relative);
+        let across = (shift + self.normal * deepening).length();
+        let contact_point = self.moved_contact_point(relative);
+        let gradients = surface_gradients(shapes, relative, contact_point);
+        // The local indentation changes by the approach plus the tilt of the surfaces across
+        // the overlap: how far their normals at the contact point turned (not at all for a
+        // ball spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels
+        // across the grid by the shift plus the roll.
+        let turn = (gradients[0] - self.gradients[0]).length() + (gradients[1] - self.gradients[1]).length();
+        let tilt = TILT_WEIGHT * turn * self.reach;
+        if !(deepening.abs() + tilt <= fraction * self.indentation && across + chord * self.lever <= fraction * self.cell) {
+            return None;
+        }
+        // The overlap grows as if similar about its deepest point: its depth `D = d / rate`
+        // follows the approach one to one, `d` and `V` in proportion to `D` and `D^p`.
+        let ratio = 1.0 + deepening * self.depth_rate / self.indentation;
+        // Parting (possible only with allowances above 1) is left to a full evaluation.
+        if !(ratio > 0.0) {
+            return None;
+        }
+        let p = self.exponent;
+        // The normal turns as the surfaces' own normal there does.
+        let (before, now) = ((self.gradients[1] - self.gradients[0]).normalize_or_zero(), (gradients[1] - gradients[0]).normalize_or_zero());
+        if before == Vector::ZERO || now == Vector::ZERO || !now.is_finite() {
+            return None;
+        }
+        let normal = Rotation::from_rotation_arc(before, now) * self.normal;
+        Some(OverlapGeometry {
+            volume: self.volume * ratio.powf(p),
+            contact_point: pose_b.transform_point(contact_point),
+            normal: pose_b.rotation * normal,
+            indentation: self.indentation * ratio,
+            surface_area: self.surface_area * ratio.powf(p - 1.0),
+            corrected_box,
+        })
+    }
+
+    /// The contact point (B's frame) with A at `relative`: between two balls about the
+    /// bodies' centres it lies on the line of centres, `R_B / (R_A + R_B)` of the way from B's;
+    /// against a flat B it follows A's centre; under a flat A it turns with A about B's
+    /// centre. Exact for two balls and a ball on a plane (whether it slides, rolls or spins);
+    /// for other shapes an estimate within the allowances.
+    fn moved_contact_point(&self, relative: &Pose) -> Vector {
+        let [r_a, r_b] = self.radii;
+        let centre_a = relative.transform_point(self.centres[0]);
+        let centre_b = self.centres[1];
+        if !r_b.is_finite() {
+            self.contact_point + (centre_a - (self.contact_point + self.normal * r_a))
+        } else if !r_a.is_finite() {
+            let turn = relative.rotation * self.relative.rotation.inverse();
+            centre_b + turn * self.normal * r_b
+        } else {
+            centre_b + (centre_a - centre_b) * (r_b / (r_a + r_b))
+        }
+    }
+
+    /// The relative motion since this reference, seen at its contact point: how far A moved
+    /// into B along the normal (m), the point's displacement (m, B's frame) and the rotation's
+    /// chord per unit radius, `2 sin(θ/2)`.
+    fn motion(&self, relative: &Pose) -> (Real, Vector, Real) {
+        let motion = *relative * self.relative.inverse();
+        let shift = motion.transform_point(self.contact_point) - self.contact_point;
+        let q = motion.rotation;
+        (-shift.dot(self.normal), shift, 2.0 * Vector::new(q.x, q.y, q.z).length())
+    }
+}
+
+/// The bodies' distance gradients at `x` (B's frame, A at `relative` in it): A's, then B's.
+fn surface_gradients<A: Sdf + ?Sized, B: Sdf + ?Sized>((a, b): (&A, &B), relative: &Pose, x: Vector) -> [Vector; 2] {
+    [relative.rotation * a.gradient(relative.inverse_transform_point(x)), b.gradient(x)]
+}
+
+/// How much more a tilt counts than an approach against the normal allowance. An update
+/// follows the approach (volume and indentation along the overlap's volume law) but not the
+/// uneven depth a tilt gives a face resting on a face, which moves the overlap's centroid and
+/// so makes the restoring torque of a rocking body: frozen for too long, that torque lags the
+/// rocking, feeds it, and a box on a ramp walks down.
+const TILT_WEIGHT: Real = 8.0;
+
+/// Relative change of the indentation, `|ln(d₁/d₀)|`, below which two full evaluations are too
+/// close to measure the volume law by their secants (the last law is kept).
+const MIN_LOG_INDENTATION_STEP: Real = 0.05;
+
+/// The volume law at the full evaluation `g` (A at `relative` in B's frame): the exponent `p`
+/// of `V ∝ d^p`, within [1, 3] (a punch's 1, a cap's or an edge's 2, a corner's 3), and the
+/// indentation's rate against the approach, `dd/dδ` within [0.05, 1] (1 where the deepest
+/// point lies under the centroid, as for caps and punches; less for a tilted corner). Both
+/// are secants from the `previous` full evaluation of the same contact where the indentation
+/// changed enough between them, else the previous law; at first touch the overlap's shape
+/// measure [`volume_exponent`](crate::force::volume_exponent) and a rate of 1.
+fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry) -> (Real, Real) {
+    let Some(r) = previous else {
+        return (crate::force::volume_exponent(g.volume, g.indentation, g.surface_area).clamp(1.0, 3.0), 1.0);
+    };
+    let step = (g.indentation / r.indentation).ln();
+    let exponent = (g.volume / r.volume).ln() / step;
+    let rate = (g.indentation - r.indentation) / r.motion(relative).0;
+    if step.abs() >= MIN_LOG_INDENTATION_STEP && exponent.is_finite() && rate.is_finite() {
+        (exponent.clamp(1.0, 3.0), rate.clamp(0.05, 1.0))
+    } else {
+        (r.exponent, r.depth_rate)
+    }
+}
+
+/// Checks a geometry reuse fraction (see [`ContactModel::with_geometry_reuse`]).
+pub(crate) fn check_reuse(fraction: Real) -> Result<Real> {
+    crate::error::check_range("geometry_reuse", fraction, 0.0, true, 100.0, true, "0 <= fraction <= 100")
+}
+
+/// A's body frame in B's body frame.
+fn relative_pose(a: &Pose, b: &Pose) -> Pose {
+    b.inverse() * *a
 }
 
 /// Geometry and force of one evaluation.
@@ -66,7 +250,14 @@ pub struct ContactOutput {
     pub geometry: OverlapGeometry,
     /// Force and torques.
     pub force: ContactForce,
+    /// Whether the geometry was integrated in full (`false`: updated from the last full one).
+    pub full: bool,
 }
+
+/// The geometry reuse fraction by default: the indentation may change by this fraction of
+/// itself, the contact travel by this fraction of a cell, between full evaluations (see
+/// [`ContactModel::with_geometry_reuse`]).
+pub const GEOMETRY_REUSE: Real = 0.25;
 
 /// The contact law for one kind of pair: force parameters plus overlap resolution.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,12 +266,34 @@ pub struct ContactModel {
     pub params: PairParameters,
     /// Overlap grid resolution and mode.
     pub settings: OverlapSettings,
+    /// Geometry reuse: the fraction of the grid spacing a live contact may move between full
+    /// evaluations (0: every evaluation is full).
+    pub reuse: Real,
 }
 
 impl ContactModel {
-    /// A model from checked parameters.
+    /// A model from checked parameters that evaluates every contact in full (geometry reuse
+    /// off; [`with_geometry_reuse`](Self::with_geometry_reuse) turns it on).
     pub fn new(params: PairParameters, settings: OverlapSettings) -> Self {
-        Self { params, settings }
+        Self { params, settings, reuse: 0.0 }
+    }
+
+    /// With geometry reuse at `fraction` (`0 <= fraction <= 100`; 0 turns reuse off): between
+    /// full evaluations a live contact's geometry is updated from the pair's relative motion
+    /// (see the module docs) while
+    /// - its local indentation changes by at most `fraction × d` — the approach along the
+    ///   normal plus eight times the tilt across the overlap (how far the surfaces' normals at
+    ///   the contact point turned, times the corrected box's diagonal; an update does not move
+    ///   the centroid as a tilt does), and
+    /// - A's material point at the contact travels across the grid by at most
+    ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
+    ///   the roll's chord at the nearer centre of mass.
+    ///
+    /// Beyond either, the next evaluation is full. Values above 1 let the geometry drift far
+    /// from what the grid gives; they exist to show that the bound matters.
+    pub fn with_geometry_reuse(mut self, fraction: Real) -> Result<Self> {
+        self.reuse = check_reuse(fraction)?;
+        Ok(self)
     }
 
     /// Evaluates the pair and updates its persistent `state`: `None` → a new contact starts
@@ -95,10 +308,19 @@ impl ContactModel {
     ) -> Result<Option<ContactOutput>> {
         a.kinematics.check("kinematics of body A")?;
         b.kinematics.check("kinematics of body B")?;
-        let previous = state.as_ref().map(|s| s.corrected_box);
-        let Some(geometry) = compute_overlap(a.shape, &a.pose, b.shape, &b.pose, &self.settings, previous.as_ref())? else {
-            *state = None;
-            return Ok(None);
+        let relative = relative_pose(&a.pose, &b.pose);
+        let updated = state.as_ref().filter(|_| self.reuse > 0.0).and_then(|s| s.reference.as_ref()?.update((a.shape, b.shape), &relative, &b.pose, s.corrected_box, self.reuse));
+        let full = updated.is_none();
+        let geometry = match updated {
+            Some(g) => g,
+            None => {
+                let previous = state.as_ref().map(|s| s.corrected_box);
+                let Some(g) = compute_overlap(a.shape, &a.pose, b.shape, &b.pose, &self.settings, previous.as_ref())? else {
+                    *state = None;
+                    return Ok(None);
+                };
+                g
+            }
         };
         let x = geometry.contact_point;
         let approach = -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
@@ -108,6 +330,7 @@ impl ContactModel {
             corrected_box: geometry.corrected_box,
             tangential: TangentialHistory::default(),
             normal_stiffness: 0.0,
+            reference: None,
         });
         // In a binary impact the approach speed only falls after first touch. A contact that
         // a third body drives faster (a pile, a contact begun while sliding) re-bases `c` on
@@ -117,7 +340,10 @@ impl ContactModel {
             s.damping = self.params.damping_for(approach);
             s.reference_approach_speed = approach;
         }
-        s.corrected_box = geometry.corrected_box;
+        if full {
+            s.corrected_box = geometry.corrected_box;
+            s.reference = (self.reuse > 0.0).then(|| self.reference(relative, s.reference.as_ref(), a, b, &geometry));
+        }
         let carried = s.tangential.carried(&a.pose, &b.pose, geometry.normal);
         let (force, spring) =
             contact_force_with_history(&self.params, s.damping, &geometry, &a.kinematics, &b.kinematics, carried, s.tangential.sliding);
@@ -125,6 +351,47 @@ impl ContactModel {
         if self.params.tangential == crate::TangentialLaw::Spring {
             s.tangential.record(spring.displacement, spring.sliding, geometry.contact_point, &a.pose, &b.pose);
         }
-        Ok(Some(ContactOutput { geometry, force }))
+        Ok(Some(ContactOutput { geometry, force, full }))
+    }
+
+    /// What the updates until the next full evaluation start from (see
+    /// [`with_geometry_reuse`](Self::with_geometry_reuse) for the allowances).
+    fn reference<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        relative: Pose,
+        previous: Option<&Reference>,
+        a: &BodyState<'_, A>,
+        b: &BodyState<'_, B>,
+        g: &OverlapGeometry,
+    ) -> Reference {
+        let sides = g.corrected_box.maxs - g.corrected_box.mins;
+        let reach = sides.length();
+        let nearer = (g.contact_point - a.kinematics.center_of_mass).length().min((g.contact_point - b.kinematics.center_of_mass).length());
+        let (exponent, depth_rate) = volume_law(previous, &relative, g);
+        let contact_point = b.pose.inverse_transform_point(g.contact_point);
+        let normal = b.pose.rotation.inverse() * g.normal;
+        // Each body's centre on the normal line, as far from the contact point as its bounding
+        // sphere's centre (B's frame; A's then taken to A's frame).
+        let radius = |bounds: (Vector, Real), centre: Vector| if bounds.1.is_finite() { (centre - contact_point).length() } else { Real::INFINITY };
+        let r_a = radius(a.shape.bounding_sphere(), relative.transform_point(a.shape.bounding_sphere().0));
+        let r_b = radius(b.shape.bounding_sphere(), b.shape.bounding_sphere().0);
+        let on_line = |r: Real, side: Real| if r.is_finite() { contact_point + normal * (side * r) } else { contact_point };
+        let centres = [relative.inverse_transform_point(on_line(r_a, 1.0)), on_line(r_b, -1.0)];
+        Reference {
+            relative,
+            contact_point,
+            normal,
+            gradients: surface_gradients((a.shape, b.shape), &relative, contact_point),
+            centres,
+            radii: [r_a, r_b],
+            volume: g.volume,
+            indentation: g.indentation,
+            surface_area: g.surface_area,
+            exponent,
+            depth_rate,
+            reach,
+            lever: nearer.max(reach),
+            cell: sides.max_element() / self.settings.n_c() as Real,
+        }
     }
 }

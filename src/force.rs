@@ -84,9 +84,19 @@ pub fn normal_stiffness(elastic_force: Real, geometry: &OverlapGeometry) -> Real
     if !(v > 0.0 && d > 0.0 && elastic_force > 0.0) {
         return 0.0;
     }
-    let s = geometry.surface_area;
-    let shape = if s > 0.0 && s.is_finite() { (0.5 * d * s / v).clamp(1.0, 2.0) } else { 2.0 };
-    elastic_force * (1.0 + shape) / (2.0 * d)
+    elastic_force * (1.0 + volume_exponent(v, d, geometry.surface_area).clamp(1.0, 2.0)) / (2.0 * d)
+}
+
+/// The exponent `p = d A / V` of the overlap's volume law `V ∝ d^p` near this indentation,
+/// with `A = dV/dd` taken as half the surface area `s`: 2 for a cap, 1 for a flat punch, about
+/// 3 or more for a corner; 2 when the area is missing. Unclamped: callers keep it within the
+/// range they can use. For an overlap with `V > 0`, `d > 0`.
+pub(crate) fn volume_exponent(v: Real, d: Real, s: Real) -> Real {
+    if s > 0.0 && s.is_finite() {
+        0.5 * d * s / v
+    } else {
+        2.0
+    }
 }
 
 /// Normal force magnitude `F_n = max(0, E* k sqrt(V d) (1 + c ḋ))`.
