@@ -3,11 +3,14 @@
 //!
 //! Writes `target/validation/cylinder_impact.csv` and `cylinder_impact.png`, and prints the
 //! error against run time.
+//!
+//! `cargo run --release --example cylinder_impact [-- --reuse 0.25]`: `--reuse f` sets the
+//! geometry reuse (0: the contact evaluated in full on every sub-step).
 
 #[path = "common/mod.rs"]
 mod common;
 
-use discrete_contact::validation::cylinder_impact::{park, simulate};
+use discrete_contact::validation::cylinder_impact::{park, simulate_with_reuse};
 use discrete_contact::{IntegrationMode, OverlapSettings};
 use plotters::prelude::*;
 use rayon::prelude::*;
@@ -25,6 +28,8 @@ struct Row {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args = common::Args::from_env(include_str!("cylinder_impact.rs"));
+    let reuse = args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE);
     let thetas: Vec<f64> = (0..=18).map(|i| 5.0 * i as f64).collect();
     let mut jobs = Vec::new();
     for mode in MODES {
@@ -38,7 +43,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rows: Vec<Row> = jobs
         .par_iter()
         .map(|&(theta, n, mode)| {
-            let r = simulate(theta, OverlapSettings::new(n, mode).expect("valid")).expect("impact runs");
+            let r = simulate_with_reuse(theta, OverlapSettings::new(n, mode).expect("valid"), reuse).expect("impact runs");
             Row { theta, n, mode, v: r.v_ratio, w: r.omega_r_ratio, time: r.wall_time_s }
         })
         .collect();
@@ -55,7 +60,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "theta_deg,n_c,mode,v_ratio,omega_r_ratio,v_ratio_analytic,omega_r_ratio_analytic,wall_time_s",
         &csv,
     );
-    println!("Error against Park (2003) for 10° <= θ <= 80°, and run time per impact:");
+    println!("Error against Park (2003) for 10° <= θ <= 80°, and run time per impact (geometry reuse {reuse}):");
     println!("{:>7} {:>4} {:>12} {:>12} {:>12}", "mode", "N_c", "max |Δv/v|", "max |ΔRω/v|", "s/impact");
     for mode in MODES {
         for n in RESOLUTIONS {

@@ -89,12 +89,11 @@ pub struct Reference {
     /// The bodies' distance gradients at the contact point, A's and B's (B's frame): an update
     /// turns `normal` as `∇d_B − ∇d_A` turns, and counts their turn as tilt.
     pub gradients: [Vector; 2],
-    /// Each body's centre on the normal through the contact point, at the distance of its
-    /// bounding sphere's centre (A's in A's frame, B's in B's frame); the distances, infinite
-    /// for an unbounded body (a half-space). An update moves the contact point as it would
-    /// move between two balls about these centres.
+    /// Each body's bounding-sphere centre (A's in A's frame, B's in B's frame): an update moves
+    /// the contact point as it would move between two balls about these centres.
     pub centres: [Vector; 2],
-    /// The distances of [`centres`](Self::centres) from the contact point (m).
+    /// The distances of [`centres`](Self::centres) from the contact point (m), infinite for an
+    /// unbounded body (a half-space).
     pub radii: [Real; 2],
     /// Volume (m³).
     pub volume: Real,
@@ -110,8 +109,8 @@ pub struct Reference {
     /// diagonal (the box holds the overlap and its centroid), the lever by which a relative
     /// rotation changes the local indentation.
     pub reach: Real,
-    /// The lever by which a relative rotation moves the contact point (m): the nearer body's
-    /// centre of mass (a body rolling on another), at least `reach`.
+    /// The lever by which a relative rotation moves A's material point at the contact (m): the
+    /// nearer of the bodies' centres (a body rolling on another), at least `reach`.
     pub lever: Real,
     /// The overlap grid's cell (m): the corrected box's longest side over `N_c`.
     pub cell: Real,
@@ -129,15 +128,17 @@ impl Reference {
         corrected_box: Aabb,
         fraction: Real,
     ) -> Option<OverlapGeometry> {
-        let (deepening, shift, chord) = self.motion(relative);
-        let across = (shift + self.normal * deepening).length();
+        let (shift, chord) = self.motion(relative);
+        let deepening = self.deepening(relative);
+        let across = (shift - self.normal * shift.dot(self.normal)).length();
         let contact_point = self.moved_contact_point(relative);
         let gradients = surface_gradients(shapes, relative, contact_point);
         // The local indentation changes by the approach plus the tilt of the surfaces across
-        // the overlap: how far their normals at the contact point turned (not at all for a
-        // ball spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels
-        // across the grid by the shift plus the roll.
-        let turn = (gradients[0] - self.gradients[0]).length() + (gradients[1] - self.gradients[1]).length();
+        // the overlap: how far their normals at the contact point turned against each other
+        // (not when both turn alike, as in B's frame under a spinning B, nor for a ball
+        // spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels across the
+        // grid by the shift plus the roll.
+        let turn = ((gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1])).length();
         let tilt = TILT_WEIGHT * turn * self.reach;
         if !(deepening.abs() + tilt <= fraction * self.indentation && across + chord * self.lever <= fraction * self.cell) {
             return None;
@@ -166,33 +167,52 @@ impl Reference {
         })
     }
 
-    /// The contact point (B's frame) with A at `relative`: between two balls about the
-    /// bodies' centres it lies on the line of centres, `R_B / (R_A + R_B)` of the way from B's;
-    /// against a flat B it follows A's centre; under a flat A it turns with A about B's
-    /// centre. Exact for two balls and a ball on a plane (whether it slides, rolls or spins);
-    /// for other shapes an estimate within the allowances.
+    /// The contact point (B's frame) with A at `relative`, moved as between two balls about
+    /// the bodies' centres: by `R_B / (R_A + R_B)` of A's centre's displacement (all of it
+    /// against a flat B), or turned with A about B's centre under a flat A. Exact for two
+    /// balls and a ball on a plane (whether it slides, rolls or spins); for other shapes an
+    /// estimate within the allowances.
     fn moved_contact_point(&self, relative: &Pose) -> Vector {
         let [r_a, r_b] = self.radii;
-        let centre_a = relative.transform_point(self.centres[0]);
-        let centre_b = self.centres[1];
-        if !r_b.is_finite() {
-            self.contact_point + (centre_a - (self.contact_point + self.normal * r_a))
-        } else if !r_a.is_finite() {
+        let (x, centre_b) = (self.contact_point, self.centres[1]);
+        let moved_a = relative.transform_point(self.centres[0]) - self.relative.transform_point(self.centres[0]);
+        if !r_a.is_finite() {
             let turn = relative.rotation * self.relative.rotation.inverse();
-            centre_b + turn * self.normal * r_b
+            centre_b + turn * (x - centre_b)
+        } else if !r_b.is_finite() {
+            x + moved_a
         } else {
-            centre_b + (centre_a - centre_b) * (r_b / (r_a + r_b))
+            x + moved_a * (r_b / (r_a + r_b))
         }
     }
 
-    /// The relative motion since this reference, seen at its contact point: how far A moved
-    /// into B along the normal (m), the point's displacement (m, B's frame) and the rotation's
-    /// chord per unit radius, `2 sin(θ/2)`.
-    fn motion(&self, relative: &Pose) -> (Real, Vector, Real) {
+    /// The relative motion since this reference: the displacement of A's material point at
+    /// the contact point (m, B's frame) and the rotation's chord per unit radius,
+    /// `2 sin(θ/2)`.
+    fn motion(&self, relative: &Pose) -> (Vector, Real) {
         let motion = *relative * self.relative.inverse();
-        let shift = motion.transform_point(self.contact_point) - self.contact_point;
         let q = motion.rotation;
-        (-shift.dot(self.normal), shift, 2.0 * Vector::new(q.x, q.y, q.z).length())
+        (motion.transform_point(self.contact_point) - self.contact_point, 2.0 * Vector::new(q.x, q.y, q.z).length())
+    }
+
+    /// How far A moved into B since this reference (m), as between two balls about the
+    /// bodies' centres (see [`moved_contact_point`](Self::moved_contact_point)): the centres'
+    /// approach, or a centre's approach to the other body's plane. A ball rolling or spinning
+    /// on another does not approach it.
+    fn deepening(&self, relative: &Pose) -> Real {
+        let [r_a, r_b] = self.radii;
+        let (x, n, centre_b) = (self.contact_point, self.normal, self.centres[1]);
+        let (then, now) = (self.relative.transform_point(self.centres[0]), relative.transform_point(self.centres[0]));
+        if !r_a.is_finite() {
+            // A's plane, through its material point at the contact point, turned with A.
+            let motion = *relative * self.relative.inverse();
+            let (moved, turned) = (motion.transform_point(x), motion.rotation * n);
+            (x - centre_b).dot(n) - (moved - centre_b).dot(turned)
+        } else if !r_b.is_finite() {
+            -(now - then).dot(n)
+        } else {
+            (then - centre_b).length() - (now - centre_b).length()
+        }
     }
 }
 
@@ -225,7 +245,7 @@ fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry
     };
     let step = (g.indentation / r.indentation).ln();
     let exponent = (g.volume / r.volume).ln() / step;
-    let rate = (g.indentation - r.indentation) / r.motion(relative).0;
+    let rate = (g.indentation - r.indentation) / r.deepening(relative);
     if step.abs() >= MIN_LOG_INDENTATION_STEP && exponent.is_finite() && rate.is_finite() {
         (exponent.clamp(1.0, 3.0), rate.clamp(0.05, 1.0))
     } else {
@@ -266,9 +286,8 @@ pub struct ContactModel {
     pub params: PairParameters,
     /// Overlap grid resolution and mode.
     pub settings: OverlapSettings,
-    /// Geometry reuse: the fraction of the grid spacing a live contact may move between full
-    /// evaluations (0: every evaluation is full).
-    pub reuse: Real,
+    /// Geometry reuse fraction (0: every evaluation is full); private so that it stays checked.
+    reuse: Real,
 }
 
 impl ContactModel {
@@ -294,6 +313,11 @@ impl ContactModel {
     pub fn with_geometry_reuse(mut self, fraction: Real) -> Result<Self> {
         self.reuse = check_reuse(fraction)?;
         Ok(self)
+    }
+
+    /// The geometry reuse fraction (see [`with_geometry_reuse`](Self::with_geometry_reuse)).
+    pub fn geometry_reuse(&self) -> Real {
+        self.reuse
     }
 
     /// Evaluates the pair and updates its persistent `state`: `None` → a new contact starts
@@ -342,7 +366,9 @@ impl ContactModel {
         }
         if full {
             s.corrected_box = geometry.corrected_box;
-            s.reference = (self.reuse > 0.0).then(|| self.reference(relative, s.reference.as_ref(), a, b, &geometry));
+            // An exact form (closed-form spheres, exact polyhedra) costs less than an update.
+            let exact = crate::overlap::has_exact_form(a.shape, b.shape, &self.settings);
+            s.reference = (self.reuse > 0.0 && !exact).then(|| self.reference(relative, s.reference.as_ref(), a, b, &geometry));
         }
         let carried = s.tangential.carried(&a.pose, &b.pose, geometry.normal);
         let (force, spring) =
@@ -366,17 +392,15 @@ impl ContactModel {
     ) -> Reference {
         let sides = g.corrected_box.maxs - g.corrected_box.mins;
         let reach = sides.length();
-        let nearer = (g.contact_point - a.kinematics.center_of_mass).length().min((g.contact_point - b.kinematics.center_of_mass).length());
         let (exponent, depth_rate) = volume_law(previous, &relative, g);
         let contact_point = b.pose.inverse_transform_point(g.contact_point);
         let normal = b.pose.rotation.inverse() * g.normal;
-        // Each body's centre on the normal line, as far from the contact point as its bounding
-        // sphere's centre (B's frame; A's then taken to A's frame).
-        let radius = |bounds: (Vector, Real), centre: Vector| if bounds.1.is_finite() { (centre - contact_point).length() } else { Real::INFINITY };
-        let r_a = radius(a.shape.bounding_sphere(), relative.transform_point(a.shape.bounding_sphere().0));
-        let r_b = radius(b.shape.bounding_sphere(), b.shape.bounding_sphere().0);
-        let on_line = |r: Real, side: Real| if r.is_finite() { contact_point + normal * (side * r) } else { contact_point };
-        let centres = [relative.inverse_transform_point(on_line(r_a, 1.0)), on_line(r_b, -1.0)];
+        // Each body's bounding-sphere centre (its own frame), and its distance from the contact
+        // point; infinite for an unbounded body.
+        let (sphere_a, sphere_b) = (a.shape.bounding_sphere(), b.shape.bounding_sphere());
+        let radius = |(_, r): (Vector, Real), in_b: Vector| if r.is_finite() { (in_b - contact_point).length() } else { Real::INFINITY };
+        let (r_a, r_b) = (radius(sphere_a, relative.transform_point(sphere_a.0)), radius(sphere_b, sphere_b.0));
+        let centres = [sphere_a.0, sphere_b.0];
         Reference {
             relative,
             contact_point,
@@ -390,7 +414,7 @@ impl ContactModel {
             exponent,
             depth_rate,
             reach,
-            lever: nearer.max(reach),
+            lever: r_a.min(r_b).max(reach),
             cell: sides.max_element() / self.settings.n_c() as Real,
         }
     }

@@ -40,8 +40,8 @@
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
 
 use rapier3d_f64::prelude::{
-    ActiveHooks, ColliderHandle, ContactModificationContext, EventHandler, PairFilterContext, PhysicsHooks, PhysicsWorld,
-    RigidBodyHandle, SolverFlags,
+    ActiveHooks, Collider, ColliderHandle, ContactModificationContext, EventHandler, PairFilterContext, PhysicsHooks, PhysicsWorld,
+    RigidBodyHandle, RigidBodyType, SolverFlags,
 };
 
 use crate::contact::{BodyState, ContactModel, ContactState};
@@ -341,8 +341,12 @@ impl DiscreteContacts {
         let half_size = if radius.is_finite() { (b.maxs - b.mins).min_element() * 0.5 } else { Real::INFINITY };
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
         self.handled.insert(collider, Handled { shape, material, centre, radius, half_size });
-        // A gap measured for another shape or size bounds nothing now.
+        // A gap measured for another shape or size bounds nothing now, nor does a live
+        // contact's last full geometry.
         self.gaps.clear();
+        for (_, state) in self.states.iter_mut().filter(|((a, b), _)| *a == collider || *b == collider) {
+            state.reference = None;
+        }
         self.generation += 1;
         Ok(())
     }
@@ -587,15 +591,20 @@ impl DiscreteContacts {
         Ok(pairs)
     }
 
-    /// Whether rapier would let colliders `a` and `b` touch: on different bodies, both
-    /// enabled and solid, their collision and solver groups admitting each other.
+    /// Whether rapier would let colliders `a` and `b` push each other: on different bodies,
+    /// both enabled and solid, one of their active collision types admitting the pair of body
+    /// types (a collider without a body counts as fixed), their collision and solver groups
+    /// admitting each other.
     fn interact(world: &PhysicsWorld, a: ColliderHandle, b: ColliderHandle) -> bool {
         let (ca, cb) = (&world.colliders[a], &world.colliders[b]);
+        let body_type = |co: &Collider| co.parent().and_then(|h| world.bodies.get(h)).map_or(RigidBodyType::Fixed, |rb| rb.body_type());
+        let (ta, tb) = (body_type(ca), body_type(cb));
         (ca.parent().is_none() || ca.parent() != cb.parent())
             && ca.is_enabled()
             && cb.is_enabled()
             && !ca.is_sensor()
             && !cb.is_sensor()
+            && (ca.active_collision_types().test(ta, tb) || cb.active_collision_types().test(ta, tb))
             && ca.collision_groups().test(cb.collision_groups())
             && ca.solver_groups().test(cb.solver_groups())
     }
@@ -613,7 +622,7 @@ impl DiscreteContacts {
     /// bounded pairs come from the neighbour list.
     fn rapier_half_space_pairs<'w>(&'w self, world: &'w PhysicsWorld) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
         let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
-        self.rapier_pairs(world).filter(move |(a, b)| unbounded(a) || unbounded(b))
+        self.rapier_pairs(world).filter(move |&(a, b)| (unbounded(&a) || unbounded(&b)) && Self::interact(world, a, b))
     }
 
     /// Half the contact enlargement of a pair: each bounding sphere grows by it.
@@ -678,7 +687,7 @@ impl DiscreteContacts {
             for (&c, h) in self.handled.iter().filter(|(_, h)| h.radius.is_finite()) {
                 let (pose_c, kc, _, _) = Self::kinematics(world, c);
                 let gap = n.dot(pose_c.transform_point(h.centre) - on_plane) - h.radius;
-                if gap <= (speed(h, &kc) + speed(&self.handled[&p], &kp)) * dt && !known.contains(&(p, c)) {
+                if gap <= (speed(h, &kc) + speed(&self.handled[&p], &kp)) * dt && !known.contains(&(p, c)) && Self::interact(world, p, c) {
                     pairs.push((p, c));
                 }
             }

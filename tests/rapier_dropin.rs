@@ -134,3 +134,33 @@ fn a_stiff_impact_does_not_depend_on_where_the_scene_is_in_f64_and_stalls_in_f32
     assert!(near < 0.01 && (near - far).abs() < 1e-3, "restitution error {near} at the origin, {far} 10 m away");
     assert_eq!(at(10.0, true), Ending::Stuck);
 }
+
+/// A frictionless ball spinning on the floor stays where it is with geometry reuse (the
+/// default): its updates move the contact point and turn the normal as the ball's own
+/// geometry does — not at all — so no sideways force builds up between full evaluations.
+/// Reuse must also skip most of them here. (An update that carried the contact point with the
+/// ball's material, and the normal with its frame, pushed it sideways by micrometres.)
+#[test]
+fn a_spinning_ball_stays_put_with_geometry_reuse() {
+    use discrete_contact::math::Vector;
+    let r = 0.005;
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::new(0.0, -9.81, 0.0);
+    world.integration_parameters.dt = 1e-4;
+    let floor = world.insert_body(RigidBodyBuilder::fixed());
+    world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(floor));
+    let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, r, 0.0)).angvel(Vector::new(0.0, 0.0, 20.0)).can_sleep(false));
+    world.insert_collider(ColliderBuilder::ball(r).density(7800.0), Some(ball));
+    let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5).unwrap();
+    contacts.handle_all(&mut world, Material::new(5e8, 0.3).unwrap()).unwrap();
+    let (mut full, mut all) = (0, 0);
+    for _ in 0..2000 {
+        let s = contacts.step(&mut world).unwrap();
+        (full, all) = (full + s.full_evaluations, all + s.evaluations);
+    }
+    let p = world.bodies[ball].translation();
+    let sideways = p.x.hypot(p.z);
+    println!("sideways {sideways:e} m after 0.2 s, {full} of {all} evaluations full");
+    assert!(sideways < 1e-8, "the spinning ball moved {sideways:e} m sideways");
+    assert!(2 * full < all, "reuse skipped too few full evaluations ({full} of {all})");
+}

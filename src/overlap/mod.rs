@@ -434,6 +434,16 @@ fn placed<'a, S: Sdf + ?Sized>(shape: &'a S, rel: Pose, eps: Real) -> Placed<'a,
     Placed { shape, rot, rot_t: rot.transpose(), origin: rel.translation, eps }
 }
 
+/// Whether `settings` compute the pair in an exact form rather than on the grid: two balls or
+/// a ball and a half-space with closed-form spheres, two bodies with face planes with exact
+/// polyhedra. (An exact form may still fall back to the grid, at deep engulfment.)
+pub(crate) fn has_exact_form<A: Sdf + ?Sized, B: Sdf + ?Sized>(a: &A, b: &B, settings: &OverlapSettings) -> bool {
+    let (ball_a, ball_b) = (a.sphere_radius().is_some(), b.sphere_radius().is_some());
+    let (plane_a, plane_b) = (a.half_space_normal().is_some(), b.half_space_normal().is_some());
+    let spheres = (ball_a && (ball_b || plane_b)) || (ball_b && plane_a);
+    (settings.closed_form_spheres && spheres) || (settings.exact_polyhedra && a.face_planes().is_some() && b.face_planes().is_some())
+}
+
 /// Computes the overlap of body A (`a` at `pose_a`) and body B (`b` at `pose_b`).
 ///
 /// `previous_box` is last sub-step's [`OverlapGeometry::corrected_box`] of the same pair; it is

@@ -56,8 +56,15 @@ pub struct Rebound {
     pub wall_time_s: Real,
 }
 
-/// Runs the impact at `theta_deg` and returns the state when the first contact ends.
+/// Runs the impact at `theta_deg` and returns the state when the first contact ends, with the
+/// drop-in's default geometry reuse ([`GEOMETRY_REUSE`](crate::contact::GEOMETRY_REUSE)).
 pub fn simulate(theta_deg: Real, settings: OverlapSettings) -> Result<Rebound> {
+    simulate_with_reuse(theta_deg, settings, crate::contact::GEOMETRY_REUSE)
+}
+
+/// [`simulate`] with geometry reuse at `reuse` (0: every sub-step evaluates the contact in
+/// full; see [`DiscreteContacts::with_geometry_reuse`]).
+pub fn simulate_with_reuse(theta_deg: Real, settings: OverlapSettings, reuse: Real) -> Result<Rebound> {
     let start = Instant::now();
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::ZERO;
@@ -81,7 +88,7 @@ pub fn simulate(theta_deg: Real, settings: OverlapSettings) -> Result<Rebound> {
     );
     let cyl = world.insert_collider(ColliderBuilder::cylinder(HEIGHT / 2.0, RADIUS).density(0.0), Some(body));
     let material = Material::new(5e8, 0.35)?;
-    let mut contacts = DiscreteContacts::new(settings, RESTITUTION)?.with_policy(StepPolicy::Fixed { substeps: SUBSTEPS });
+    let mut contacts = DiscreteContacts::new(settings, RESTITUTION)?.with_policy(StepPolicy::Fixed { substeps: SUBSTEPS }).with_geometry_reuse(reuse)?;
     contacts.handle(&mut world, wall_collider, material)?;
     contacts.handle(&mut world, cyl, material)?;
     let mut touched = false;
