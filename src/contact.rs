@@ -128,10 +128,14 @@ impl Reference {
         corrected_box: Aabb,
         fraction: Real,
     ) -> Option<OverlapGeometry> {
-        let (shift, chord) = self.motion(relative);
-        let deepening = self.deepening(relative);
+        let motion = self.motion_since(relative);
+        let q = motion.rotation;
+        // A rotation by θ moves a point at distance r by its chord 2 r sin(θ/2) = 2 r |q_xyz|.
+        let chord = 2.0 * Vector::new(q.x, q.y, q.z).length();
+        let shift = motion.transform_point(self.contact_point) - self.contact_point;
+        let deepening = self.deepening(&motion);
         let across = (shift - self.normal * shift.dot(self.normal)).length();
-        let contact_point = self.moved_contact_point(relative);
+        let contact_point = self.moved_contact_point(&motion);
         let gradients = surface_gradients(shapes, relative, contact_point);
         // The local indentation changes by the approach plus the tilt of the surfaces across
         // the overlap: how far their normals at the contact point turned against each other
@@ -167,18 +171,29 @@ impl Reference {
         })
     }
 
-    /// The contact point (B's frame) with A at `relative`, moved as between two balls about
+    /// A's motion in B's frame since this reference, for A now at `relative`.
+    fn motion_since(&self, relative: &Pose) -> Pose {
+        *relative * self.relative.inverse()
+    }
+
+    /// A's bounding-sphere centre at this reference (B's frame) and its displacement by
+    /// `motion`.
+    fn centre_a(&self, motion: &Pose) -> (Vector, Vector) {
+        let then = self.relative.transform_point(self.centres[0]);
+        (then, motion.transform_point(then) - then)
+    }
+
+    /// The contact point (B's frame) after A's `motion`, moved as between two balls about
     /// the bodies' centres: by `R_B / (R_A + R_B)` of A's centre's displacement (all of it
     /// against a flat B), or turned with A about B's centre under a flat A. Exact for two
     /// balls and a ball on a plane (whether it slides, rolls or spins); for other shapes an
     /// estimate within the allowances.
-    fn moved_contact_point(&self, relative: &Pose) -> Vector {
+    fn moved_contact_point(&self, motion: &Pose) -> Vector {
         let [r_a, r_b] = self.radii;
         let (x, centre_b) = (self.contact_point, self.centres[1]);
-        let moved_a = relative.transform_point(self.centres[0]) - self.relative.transform_point(self.centres[0]);
+        let (_, moved_a) = self.centre_a(motion);
         if !r_a.is_finite() {
-            let turn = relative.rotation * self.relative.rotation.inverse();
-            centre_b + turn * (x - centre_b)
+            centre_b + motion.rotation * (x - centre_b)
         } else if !r_b.is_finite() {
             x + moved_a
         } else {
@@ -186,32 +201,22 @@ impl Reference {
         }
     }
 
-    /// The relative motion since this reference: the displacement of A's material point at
-    /// the contact point (m, B's frame) and the rotation's chord per unit radius,
-    /// `2 sin(θ/2)`.
-    fn motion(&self, relative: &Pose) -> (Vector, Real) {
-        let motion = *relative * self.relative.inverse();
-        let q = motion.rotation;
-        (motion.transform_point(self.contact_point) - self.contact_point, 2.0 * Vector::new(q.x, q.y, q.z).length())
-    }
-
-    /// How far A moved into B since this reference (m), as between two balls about the
-    /// bodies' centres (see [`moved_contact_point`](Self::moved_contact_point)): the centres'
+    /// How far A's `motion` took it into B (m), as between two balls about the bodies'
+    /// centres (see [`moved_contact_point`](Self::moved_contact_point)): the centres'
     /// approach, or a centre's approach to the other body's plane. A ball rolling or spinning
     /// on another does not approach it.
-    fn deepening(&self, relative: &Pose) -> Real {
+    fn deepening(&self, motion: &Pose) -> Real {
         let [r_a, r_b] = self.radii;
         let (x, n, centre_b) = (self.contact_point, self.normal, self.centres[1]);
-        let (then, now) = (self.relative.transform_point(self.centres[0]), relative.transform_point(self.centres[0]));
+        let (then, moved_a) = self.centre_a(motion);
         if !r_a.is_finite() {
             // A's plane, through its material point at the contact point, turned with A.
-            let motion = *relative * self.relative.inverse();
             let (moved, turned) = (motion.transform_point(x), motion.rotation * n);
             (x - centre_b).dot(n) - (moved - centre_b).dot(turned)
         } else if !r_b.is_finite() {
-            -(now - then).dot(n)
+            -moved_a.dot(n)
         } else {
-            (then - centre_b).length() - (now - centre_b).length()
+            (then - centre_b).length() - (then + moved_a - centre_b).length()
         }
     }
 }
@@ -245,7 +250,7 @@ fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry
     };
     let step = (g.indentation / r.indentation).ln();
     let exponent = (g.volume / r.volume).ln() / step;
-    let rate = (g.indentation - r.indentation) / r.deepening(relative);
+    let rate = (g.indentation - r.indentation) / r.deepening(&r.motion_since(relative));
     if step.abs() >= MIN_LOG_INDENTATION_STEP && exponent.is_finite() && rate.is_finite() {
         (exponent.clamp(1.0, 3.0), rate.clamp(0.05, 1.0))
     } else {
@@ -306,7 +311,7 @@ impl ContactModel {
     ///   the centroid as a tilt does), and
     /// - A's material point at the contact travels across the grid by at most
     ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
-    ///   the roll's chord at the nearer centre of mass.
+    ///   the roll's chord at the nearer body's bounding-sphere centre.
     ///
     /// Beyond either, the next evaluation is full. Values above 1 let the geometry drift far
     /// from what the grid gives; they exist to show that the bound matters.
@@ -367,8 +372,8 @@ impl ContactModel {
         if full {
             s.corrected_box = geometry.corrected_box;
             // An exact form (closed-form spheres, exact polyhedra) costs less than an update.
-            let exact = crate::overlap::has_exact_form(a.shape, b.shape, &self.settings);
-            s.reference = (self.reuse > 0.0 && !exact).then(|| self.reference(relative, s.reference.as_ref(), a, b, &geometry));
+            let reuse = self.reuse > 0.0 && !crate::overlap::has_exact_form(a.shape, b.shape, &self.settings);
+            s.reference = reuse.then(|| self.reference(relative, s.reference.as_ref(), a, b, &geometry));
         }
         let carried = s.tangential.carried(&a.pose, &b.pose, geometry.normal);
         let (force, spring) =
