@@ -29,7 +29,10 @@ struct Row {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = common::Args::from_env(include_str!("cylinder_impact.rs"));
-    let reuse = args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE);
+    let reuse = discrete_contact::contact::check_reuse(args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE)).unwrap_or_else(|e| {
+        eprintln!("--reuse: {e}");
+        std::process::exit(2);
+    });
     let thetas: Vec<f64> = (0..=18).map(|i| 5.0 * i as f64).collect();
     let mut jobs = Vec::new();
     for mode in MODES {

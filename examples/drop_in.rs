@@ -39,7 +39,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let per_contact = args.number("--per-contact", 6.0);
     let n_c = args.number("--nc", 4.0) as usize;
     let exact = args.flag("--exact");
-    let reuse = args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE);
+    let reuse = discrete_contact::contact::check_reuse(args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE)).unwrap_or_else(|e| {
+        eprintln!("--reuse: {e}");
+        std::process::exit(2);
+    });
 
     // 1. The scene with rapier's own contacts.
     let BinScene { mut world, .. } = bin_scene(n);

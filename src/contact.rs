@@ -258,8 +258,10 @@ fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry
     }
 }
 
-/// Checks a geometry reuse fraction (see [`ContactModel::with_geometry_reuse`]).
-pub(crate) fn check_reuse(fraction: Real) -> Result<Real> {
+/// Checks a geometry reuse fraction (see [`ContactModel::with_geometry_reuse`]): the
+/// fraction itself, or [`Error::InvalidParameter`](crate::Error::InvalidParameter) naming
+/// `geometry_reuse` outside `0 <= fraction <= 100`.
+pub fn check_reuse(fraction: Real) -> Result<Real> {
     crate::error::check_range("geometry_reuse", fraction, 0.0, true, 100.0, true, "0 <= fraction <= 100")
 }
 

@@ -138,8 +138,7 @@ fn a_stiff_impact_does_not_depend_on_where_the_scene_is_in_f64_and_stalls_in_f32
 /// A frictionless ball spinning on the floor stays where it is with geometry reuse (the
 /// default): its updates move the contact point and turn the normal as the ball's own
 /// geometry does — not at all — so no sideways force builds up between full evaluations.
-/// Reuse must also skip most of them here. (An update that carried the contact point with the
-/// ball's material, and the normal with its frame, pushed it sideways by micrometres.)
+/// Reuse must also skip most of them here.
 #[test]
 fn a_spinning_ball_stays_put_with_geometry_reuse() {
     use discrete_contact::math::Vector;
