@@ -17,12 +17,13 @@
 //!   planes (`crease`); volume, centroid and facet area vectors (the normal) in closed form.
 //!   Order 2.
 //!
-//! Counting finds the overlap's box by `find_box`: axis rays that cannot step over a thin
-//! overlap, refinement while the hits fill a small part of the searched box, and a located
-//! seed when every ray misses. Sub-cell mode bounds a first touch by cutting planes (`bound`):
-//! a box that provably holds all of it — thin wedges' tapering ends included, wherever they
-//! lie between grid lines — and proves the bodies apart when it empties; a persistent contact
-//! follows its last box.
+//! A first touch is bounded by cutting planes (`bound`): a box that provably holds all of the
+//! overlap — thin wedges' tapering ends included, wherever they lie between grid lines — and
+//! proves the bodies apart when it empties. Sub-cell mode integrates on that box; a persistent
+//! contact follows its last box. Counting shrinks its box by `find_box` (from the cutting-plane
+//! box, or a persistent contact's last one): axis rays, refinement while the hits fill a small
+//! part of the searched box, a located seed when every ray misses, then the paper's
+//! 26-direction correction.
 //!
 //! Two opt-in exact forms skip the grid for the pairs they cover — what the grid converges to
 //! as `N_c` grows: sphere lenses and caps ([`OverlapSettings::with_closed_form_spheres`]) and
@@ -516,10 +517,20 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else { return Ok(None) };
         return Ok(first_touch(&pair, &bounds, &rough, settings).or_else(|| search(&rough)).map(to_world));
     }
-    // Last sub-step's box may be far too small for this one — a contact that began with an
-    // overlap of 1e-18 m and is 1 µm deep a sub-step later: then a fresh search from the rough
-    // box decides (it also runs once when a contact ends).
-    let found = followed.or_else(|| search(reused.as_ref().unwrap_or(&rough))).or_else(|| reused.and_then(|_| search(&rough)));
+    // Counting: a persistent contact searches from its last box (grown when the overlap
+    // reaches its faces). A first touch, or a contact its box lost, searches the cutting-plane
+    // box, which proves the bodies apart when it empties: from the rough box, the axis rays
+    // stepped over thin overlaps between them and reported overlapping bodies apart. When the
+    // rays find nothing there, the nodes are counted on the cutting-plane box itself, and a
+    // search from the rough box decides what that grid finds nothing in (a touch 1e-18 m deep).
+    if let Some(found) = reused.as_ref().and_then(&search) {
+        return Ok(Some(to_world(found)));
+    }
+    let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else { return Ok(None) };
+    let found = find_box(&pair, &bounds, &bounds, settings.n_c, settings.mode)
+        .and_then(|corrected| overlap_in_box(&pair, &corrected, &bounds, settings))
+        .or_else(|| overlap_in_box(&pair, &bounds, &bounds, settings))
+        .or_else(|| search(&rough));
     Ok(found.map(to_world))
 }
 
