@@ -39,11 +39,19 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     rough: &Aabb,
 ) -> Option<Option<OverlapGeometry>> {
-    let planes: Vec<(Vector, Real, usize)> = [pair.a.planes()?, pair.b.planes()?]
+    let mut planes: Vec<(Vector, Real, usize)> = [pair.a.planes()?, pair.b.planes()?]
         .into_iter()
         .enumerate()
         .flat_map(|(body, planes)| planes.into_iter().map(move |(n, h)| (n, h, body)))
         .collect();
+    // Clipped in an order by the planes' coefficients, not by body: swapping the bodies then
+    // builds the same polyhedron to the last bit, so the forces are exactly opposite also where
+    // the overlap's net area vector is a small difference of large facets (a body nearly
+    // engulfed).
+    planes.sort_by(|p, q| {
+        let key = |(n, h, _): &(Vector, Real, usize)| [n.x, n.y, n.z, *h];
+        key(p).iter().zip(key(q).iter()).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(core::cmp::Ordering::Equal)
+    });
     let size = (rough.maxs - rough.mins).length();
     if !(size.is_finite() && size > 0.0) {
         return None;
