@@ -4,7 +4,8 @@
 //! says when it slides throughout (Maw, Barber & Fawcett 1976, doi:10.1016/0043-1648(76)90203-3),
 //! and when it sticks an elastic impact gives back its tangential energy as Hertz–Mindlin
 //! contact says (what the elastic tangential compliance adds, which a slip-speed law cannot
-//! show).
+//! show); over incident angles 5–85° an alumina sphere rebounds as the DEM benchmark of Chung &
+//! Ooi (2011) tabulates Kharaz, Gorham & Salman's (2001) experiment.
 //!
 //! A slope is the floor under a tilted gravity: the same as a tilted floor, and the displacement
 //! down the slope is the `x` coordinate.
@@ -129,35 +130,64 @@ fn a_sphere_rolls_down_a_slope_without_slipping() {
     assert!(slip.abs() < 0.01 * rb.linvel().x, "slip {slip} m/s at {} m/s", rb.linvel().x);
 }
 
-/// A 5 cm sphere striking the floor at `speed` with tangential/normal speed ratio `tan_incidence`,
-/// no spin, μ_s = μ_k = `mu`, steel (ν = 0.3) with restitution `restitution`; returns (v_n'/v_n, v_t'/v_n, R ω'/v_n) after the impact (`ω'` about
-/// the axis that rolls it forwards counted positive).
-fn oblique_impact(tan_incidence: f64, mu: f64, restitution: f64) -> (f64, f64, f64) {
-    let r = 0.05;
-    let v_n = 1.0;
+/// A sphere striking the floor without spin: radius `radius`, density `density`, Young's
+/// modulus and Poisson's ratio of the sphere against a rigid floor (`material`), incident
+/// velocity `v_t` along the floor and `v_n` into it, μ_s = μ_k = `mu`, normal restitution
+/// `restitution`.
+struct Impact {
+    radius: f64,
+    density: f64,
+    material: (f64, f64),
+    v_t: f64,
+    v_n: f64,
+    mu: f64,
+    restitution: f64,
+}
+
+/// Velocities after an [`Impact`]: along the floor, away from it, and the spin `ω'` about the
+/// axis that rolls the sphere forwards (positive when it does).
+struct Rebound {
+    v_t: f64,
+    v_n: f64,
+    spin: f64,
+}
+
+fn oblique_impact(impact: &Impact) -> Rebound {
+    let Impact { radius: r, density, material: (youngs, poisson), v_t, v_n, mu, restitution } = *impact;
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::ZERO;
+    // The contact lasts ~100 sub-steps of the automatic sub-stepping whatever the step.
     world.integration_parameters.dt = 1e-4;
     let floor = world.insert_body(RigidBodyBuilder::fixed());
     world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(floor));
-    let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, r + 1e-4, 0.0)).linvel(Vector::new(tan_incidence * v_n, -v_n, 0.0)));
-    world.insert_collider(ColliderBuilder::ball(r).density(7800.0), Some(ball));
+    let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, r * 1.002, 0.0)).linvel(Vector::new(v_t, -v_n, 0.0)));
+    world.insert_collider(ColliderBuilder::ball(r).density(density), Some(ball));
     let mut contacts = DiscreteContacts::new(OverlapSettings::new(6, IntegrationMode::Subcell).unwrap(), restitution)
         .unwrap()
         .with_friction(Friction::new(mu, mu, 1e-3).unwrap())
         .with_policy(StepPolicy::AutoSubstep { max_substeps: 5000 });
-    contacts.handle_all(&mut world, Material::new(2e11, 0.3).unwrap()).unwrap();
-    let mut touched = false;
+    // A rigid floor, as both bodies at twice the modulus: the same effective modulus
+    // E / (1 − ν²) and the same tangential stiffness ratio 2 (1 − ν) / (2 − ν).
+    contacts.handle_all(&mut world, Material::new(2.0 * youngs, poisson).unwrap()).unwrap();
+    // Until the sphere moves away and no contact is live (a short impact begins and ends
+    // within one step).
     for _ in 0..2000 {
         contacts.step(&mut world).unwrap();
-        touched |= contacts.contact_count() > 0;
-        if touched && contacts.contact_count() == 0 {
+        if world.bodies[ball].linvel().y > 0.0 && contacts.contact_count() == 0 {
             break;
         }
     }
-    assert!(touched && contacts.contact_count() == 0, "the impact did not end");
+    assert!(world.bodies[ball].linvel().y > 0.0 && contacts.contact_count() == 0, "the impact did not end");
     let rb = &world.bodies[ball];
-    (rb.linvel().y / v_n, rb.linvel().x / v_n, -rb.angvel().z * r / v_n)
+    Rebound { v_t: rb.linvel().x, v_n: rb.linvel().y, spin: -rb.angvel().z }
+}
+
+/// A 5 cm steel sphere (ν = 0.3) at 1 m/s normal speed and `tan_incidence` times that along the
+/// floor; returns (v_n'/v_n, v_t'/v_n, R ω'/v_n).
+fn steel_impact(tan_incidence: f64, mu: f64, restitution: f64) -> (f64, f64, f64) {
+    let r = 0.05;
+    let b = oblique_impact(&Impact { radius: r, density: 7800.0, material: (1e11, 0.3), v_t: tan_incidence, v_n: 1.0, mu, restitution });
+    (b.v_n, b.v_t, b.spin * r)
 }
 
 #[test]
@@ -166,7 +196,7 @@ fn an_oblique_impact_that_slides_throughout_follows_impulse_theory() {
     // tangential impulse is μ times the normal one: v_t' = v_t − μ (1 + e) v_n and
     // R ω' = 5/2 μ (1 + e) v_n, with e the rebound's own normal restitution.
     let mu = 0.3;
-    let (e, vt, rw) = oblique_impact(4.0, mu, 0.9);
+    let (e, vt, rw) = steel_impact(4.0, mu, 0.9);
     assert!((e - 0.9).abs() < 0.02, "normal restitution {e}");
     let impulse = mu * (1.0 + e);
     assert!((vt - (4.0 - impulse)).abs() < 0.01 * 4.0, "v_t'/v_n = {vt}, impulse theory {}", 4.0 - impulse);
@@ -181,11 +211,54 @@ fn a_steep_elastic_impact_that_sticks_returns_its_tangential_energy() {
     // stiffness (k_t/k_n = 2(1 − ν)/(2 − ν), m_t = 2/7 m), integrated over the impact, sends the
     // contact point off at 0.955 of its incident tangential speed, in the same sense, for
     // ν = 0.3 (the tangential oscillation completes nearly one period in the contact time).
-    let (e, vt, rw) = oblique_impact(0.3, 5.0, 1.0);
+    let (e, vt, rw) = steel_impact(0.3, 5.0, 1.0);
     let contact_point = (vt - rw) / 0.3;
     assert!((contact_point - 0.955).abs() < 0.03, "contact point leaves at {contact_point} of its incident speed");
     // Elastic: the kinetic energy (per unit mass, with I = 2/5 m R²) comes back whole.
     let energy = |v2: f64, w2: f64| 0.5 * v2 + 0.5 * 0.4 * w2;
     let ratio = energy(e * e + vt * vt, rw * rw) / energy(1.0 + 0.09, 0.0);
     assert!((ratio - 1.0).abs() < 0.01, "kinetic energy after / before = {ratio}");
+}
+
+/// The oblique impact of an aluminium-oxide sphere on a flat wall at 3.9 m/s (Kharaz, Gorham &
+/// Salman 2001, doi:10.1016/S0032-5910(01)00283-2), as tabulated for DEM codes by Chung & Ooi
+/// 2011 (doi:10.1007/s10035-011-0277-0, test 4): R = 2.5 mm, E = 380 GPa, ν = 0.23,
+/// ρ = 4000 kg/m³, μ = 0.092, e = 0.98, a rigid wall, no initial spin. Rows: incident angle
+/// from the normal (°), tangential restitution `v_t'/v_t`, spin after the impact (rad/s, rolling
+/// forwards), rebound angle of the contact point (°) — the values of Chung & Ooi's reference
+/// curves.
+const CHUNG_OOI_TEST_4: [(f64, f64, f64, f64); 13] = [
+    (5.0, 0.948, 19.0, 3.76),
+    (10.0, 0.687, 213.0, -1.56),
+    (15.0, 0.624, 378.0, -5.54),
+    (20.0, 0.616, 511.0, -7.54),
+    (25.0, 0.634, 599.0, -7.54),
+    (30.0, 0.684, 617.0, -3.55),
+    (35.0, 0.737, 582.0, 3.43),
+    (40.0, 0.781, 545.0, 11.57),
+    (50.0, 0.845, 457.0, 29.35),
+    (60.0, 0.893, 357.0, 47.79),
+    (70.0, 0.932, 246.0, 64.58),
+    (80.0, 0.966, 126.0, 78.70),
+    (85.0, 0.983, 63.0, 84.52),
+];
+
+#[test]
+fn oblique_impacts_rebound_as_the_dem_benchmark_tabulates() {
+    // Below ~32° (tan θ < 7/2 μ (1 + e)) the contact sticks for part of the impact and the
+    // tangential spring sends the contact point back (negative angles, least near 20–25°);
+    // above, it slides throughout as impulse theory says. Tolerances: the references' angles
+    // are digitised from plots (a few tenths of a degree).
+    let (r, speed, mu, e) = (2.5e-3, 3.9, 0.092, 0.98);
+    println!("{:>6} {:>14} {:>18} {:>22}   (Chung & Ooi)", "θ (°)", "v_t'/v_t", "ω' (rad/s)", "contact angle (°)");
+    for &(theta, et_ref, spin_ref, phi_ref) in &CHUNG_OOI_TEST_4 {
+        let (s, c) = theta.to_radians().sin_cos();
+        let b = oblique_impact(&Impact { radius: r, density: 4000.0, material: (3.8e11, 0.23), v_t: speed * s, v_n: speed * c, mu, restitution: e });
+        let e_t = b.v_t / (speed * s);
+        let phi = ((b.v_t - r * b.spin) / b.v_n).atan().to_degrees();
+        println!("{theta:>6.0} {e_t:>7.3} ({et_ref:>5.3}) {:>9.1} ({spin_ref:>6.1}) {phi:>11.2} ({phi_ref:>6.2})", b.spin);
+        assert!((e_t - et_ref).abs() <= 0.02, "θ = {theta}°: v_t'/v_t = {e_t}, tabulated {et_ref}");
+        assert!((b.spin - spin_ref).abs() <= 0.05 * 617.0, "θ = {theta}°: ω' = {} rad/s, tabulated {spin_ref}", b.spin);
+        assert!((phi - phi_ref).abs() <= 1.5, "θ = {theta}°: contact point leaves at {phi}°, tabulated {phi_ref}°");
+    }
 }
