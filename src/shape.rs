@@ -142,15 +142,55 @@ fn polygon_sdf_2d(p: [Real; 2], poly: &[[Real; 2]]) -> (Real, [Real; 2]) {
 }
 
 /// A convex polyhedron with an exact SDF: inside, the largest face-plane distance; outside,
-/// the distance to the nearest visible face polygon.
+/// the distance to the nearest point of the surface (see `distance_and_gradient`).
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "checkpoint", serde(from = "PolyhedronFaces", into = "PolyhedronFaces"))]
 pub struct PolyhedronSdf {
     /// Outward unit normal and offset of each face plane (`n·p - offset` is the plane distance).
     planes: Vec<(Vector, Real)>,
     /// Each face's vertices, ordered around the face.
     faces: Vec<Vec<Vector>>,
+    /// Each face's edges, face after face in the order of `faces` (see [`FaceEdge`]).
+    edges: Vec<FaceEdge>,
+    /// Where each face's edges begin in `edges`, and their end.
+    edge_start: Vec<usize>,
     bounds: Aabb,
+}
+
+/// An edge of a face, `a → a + e` in the face's counter-clockwise order, with the face's side
+/// plane through it: `o·p <= c` on the face's side, `o` the edge direction turned outward in
+/// the face's plane. A point projects into a face when it lies on the inner side of every side
+/// plane, which needs no projection: the side planes contain the face's normal.
+#[derive(Clone, Copy, Debug)]
+struct FaceEdge {
+    a: Vector,
+    e: Vector,
+    o: Vector,
+    c: Real,
+}
+
+/// What a polyhedron's checkpoint holds: its faces; the edges are rebuilt from them.
+#[cfg(feature = "checkpoint")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PolyhedronFaces {
+    planes: Vec<(Vector, Real)>,
+    faces: Vec<Vec<Vector>>,
+    bounds: Aabb,
+}
+
+#[cfg(feature = "checkpoint")]
+impl From<PolyhedronFaces> for PolyhedronSdf {
+    fn from(f: PolyhedronFaces) -> Self {
+        Self::from_faces(f.planes, f.faces, f.bounds)
+    }
+}
+
+#[cfg(feature = "checkpoint")]
+impl From<PolyhedronSdf> for PolyhedronFaces {
+    fn from(p: PolyhedronSdf) -> Self {
+        Self { planes: p.planes, faces: p.faces, bounds: p.bounds }
+    }
 }
 
 impl PolyhedronSdf {
@@ -214,58 +254,75 @@ impl PolyhedronSdf {
             mins = mins.min(*p);
             maxs = maxs.max(*p);
         }
-        Self { planes, faces, bounds: Aabb::new(mins, maxs) }
+        Self::from_faces(planes, faces, Aabb::new(mins, maxs))
+    }
+
+    /// From the face planes, each face's counter-clockwise vertices and the bounds.
+    fn from_faces(planes: Vec<(Vector, Real)>, faces: Vec<Vec<Vector>>, bounds: Aabb) -> Self {
+        let edges = planes
+            .iter()
+            .zip(&faces)
+            .flat_map(|(&(n, _), verts)| {
+                let m = verts.len();
+                (0..m).map(move |i| {
+                    let (a, e) = (verts[i], verts[(i + 1) % m] - verts[i]);
+                    let o = e.cross(n);
+                    FaceEdge { a, e, o, c: o.dot(a) }
+                })
+            })
+            .collect();
+        let edge_start = std::iter::once(0).chain(faces.iter().scan(0, |end, f| {
+            *end += f.len();
+            Some(*end)
+        })).collect();
+        Self { planes, faces, edges, edge_start, bounds }
     }
 
     /// Distance and outward gradient.
+    ///
+    /// Outside, the nearest point `q` of a convex body is the one with `p − q` in the normal
+    /// cone at `q`. So a face whose plane sees `p` and into which `p` projects gives it: its
+    /// projection. Failing that, `q` lies on an edge, and on one that `p` lies beyond as seen
+    /// from a face whose plane sees it (of the edge's two faces, at least one sees `p`, and `p`
+    /// lies on the outer side of that face's side plane through the edge): only those edges'
+    /// segments are measured, and the farthest plane's face, the likeliest, is tried first.
     fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
-        let mut best = (Real::NEG_INFINITY, Vector::Y);
-        let mut face = 0;
+        let (mut farthest, mut face) = (Real::NEG_INFINITY, 0);
         for (k, (n, off)) in self.planes.iter().enumerate() {
             let s = n.dot(p) - off;
-            if s > best.0 {
-                best = (s, *n);
-                face = k;
+            if s > farthest {
+                (farthest, face) = (s, k);
             }
         }
-        if best.0 <= 0.0 {
+        let best = (farthest, self.planes[face].0);
+        if farthest <= 0.0 {
             return best;
         }
-        // Outside, the distance is at least every plane's: when p projects into the face of
-        // the farthest plane, that projection is the nearest point.
-        let projects_into = |(n, off): &(Vector, Real), verts: &[Vector]| {
-            let proj = p - *n * (n.dot(p) - off);
-            let m = verts.len();
-            (proj, (0..m).all(|i| (verts[(i + 1) % m] - verts[i]).cross(proj - verts[i]).dot(*n) >= 0.0))
-        };
-        if projects_into(&self.planes[face], &self.faces[face]).1 {
+        let face_edges = |k: usize| &self.edges[self.edge_start[k]..self.edge_start[k + 1]];
+        let beyond = |e: &FaceEdge| e.o.dot(p) > e.c;
+        if !face_edges(face).iter().any(beyond) {
             return best;
         }
-        // Else the nearest point lies on a face whose plane sees p.
         let mut out = (Real::INFINITY, best.1);
-        for ((n, off), verts) in self.planes.iter().zip(&self.faces) {
+        for (k, (n, off)) in self.planes.iter().enumerate() {
             let s = n.dot(p) - off;
-            // A face is no nearer than its plane.
+            // A face that does not see `p`, or no nearer than the nearest point so far.
             if s <= 0.0 || s >= out.0 {
                 continue;
             }
-            let (proj, inside) = projects_into(&(*n, *off), verts);
-            let m = verts.len();
-            let (d, q) = if inside {
-                (s, proj)
-            } else {
-                (0..m)
-                    .map(|i| {
-                        let q = closest_on_segment(p, verts[i], verts[(i + 1) % m]);
-                        ((p - q).length(), q)
-                    })
-                    .min_by(|a, b| a.0.total_cmp(&b.0))
-                    .unwrap()
-            };
-            if d < out.0 {
-                // Within round-off of an edge, `p − q` has no direction: the face's normal is
-                // then as good a (sub)gradient there.
-                out = (d, if d > 1e-9 * (self.bounds.maxs - self.bounds.mins).max_element() { (p - q) / d } else { *n });
+            let mut inside = true;
+            for e in face_edges(k).iter().filter(|e| beyond(e)) {
+                inside = false;
+                let q = closest_on_segment(p, e.a, e.a + e.e);
+                let d = (p - q).length();
+                if d < out.0 {
+                    // Within round-off of an edge, `p − q` has no direction: the face's normal
+                    // is then as good a (sub)gradient there.
+                    out = (d, if d > 1e-9 * (self.bounds.maxs - self.bounds.mins).max_element() { (p - q) / d } else { *n });
+                }
+            }
+            if inside {
+                return (s, *n);
             }
         }
         out

@@ -157,15 +157,24 @@ fn distances_match_brute_force_over_the_surface() {
     let cuboid = Cuboid::new(Vector::new(0.3, 0.2, 0.1));
     let cylinder = Cylinder::new(0.25, 0.15);
     type Mesh = (Vec<Vector>, Vec<[u32; 3]>);
+    // A rock (twelve points near a sphere, triangular faces) and a box given by its corners
+    // (quadrilateral faces): the hull distance's face, edge and vertex regions.
+    let mut points = Lcg(11);
+    let rock_points: Vec<Vector> = (0..12).map(|_| points.point(1.0).normalize() * (0.25 + 0.1 * points.next())).collect();
+    let rock = ConvexPolyhedron::from_convex_hull(&rock_points).unwrap();
+    let corners: Vec<Vector> = (0..8).map(|k| Vector::new([-0.3, 0.3][k & 1], [-0.2, 0.2][(k >> 1) & 1], [-0.1, 0.1][k >> 2])).collect();
+    let box_hull = ConvexPolyhedron::from_convex_hull(&corners).unwrap();
     let cases: Vec<(&str, &dyn Shape, Mesh, f64)> = vec![
         ("polyhedron", &hull, hull.to_trimesh(), 1e-12),
+        ("rock", &rock, rock.to_trimesh(), 1e-12),
+        ("box hull", &box_hull, box_hull.to_trimesh(), 1e-12),
         ("cuboid", &cuboid, cuboid.to_trimesh(), 1e-12),
         ("cylinder", &cylinder, cylinder.to_trimesh(512), 0.15 * (1.0 - (std::f64::consts::PI / 512.0).cos()) + 1e-12),
     ];
     let mut rng = Lcg(5);
     for (name, shape, (pts, tris), tol) in cases {
         let sdf = ConvexShape::from_parry(shape).unwrap();
-        for _ in 0..300 {
+        for _ in 0..2000 {
             let p = rng.point(0.45);
             let unsigned = tris
                 .iter()

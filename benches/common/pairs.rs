@@ -1,7 +1,26 @@
-//! The three contact pairs the `contact` bench times and the `contact_profile` example loops
-//! over: two touching spheres, a tilted cylinder on a plane, two cubes, each overlapping.
+//! The contact pairs the `contact` bench times and the `contact_profile` example loops over:
+//! two touching spheres, a tilted cylinder on a plane, two cubes, two rocks (convex hulls of
+//! twelve points, as in the `drop_in` scene) and a capsule across a cylinder, each overlapping.
 
 use discrete_contact::prelude::*;
+
+/// A rock of radius ~`r`: the hull of twelve points at 0.85–1.15 `r` from its centre, from a
+/// fixed xorshift sequence (`seed`).
+fn rock(r: Real, mut seed: u64) -> ConvexShape {
+    let mut random = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as Real / (1u64 << 53) as Real
+    };
+    let points: Vec<Vector> = (0..12)
+        .map(|_| {
+            let p = Vector::new(random() - 0.5, random() - 0.5, random() - 0.5);
+            p.normalize_or(Vector::X) * r * (0.85 + 0.3 * random())
+        })
+        .collect();
+    ConvexShape::convex_hull(&points).expect("twelve points in general position")
+}
 
 /// `(name, shape A, pose A, shape B, pose B)` of each pair.
 pub fn pairs() -> Vec<(&'static str, ConvexShape, Pose, ConvexShape, Pose)> {
@@ -26,6 +45,20 @@ pub fn pairs() -> Vec<(&'static str, ConvexShape, Pose, ConvexShape, Pose)> {
             ConvexShape::cuboid(Vector::splat(0.005)).unwrap(),
             Pose::from_parts(Vector::new(0.001, 0.0098, 0.0), Rotation::from_rotation_y(0.3)),
             ConvexShape::cuboid(Vector::splat(0.005)).unwrap(),
+            Pose::IDENTITY,
+        ),
+        (
+            "hull_hull",
+            rock(0.005, 0x9E37_79B9_7F4A_7C15),
+            Pose::from_parts(Vector::new(0.001, 0.0085, 0.0), tilt),
+            rock(0.005, 0x2545_F491_4F6C_DD1D),
+            Pose::IDENTITY,
+        ),
+        (
+            "capsule_cylinder",
+            ConvexShape::capsule(Vector::new(-0.004, 0.0, 0.0), Vector::new(0.004, 0.0, 0.0), 0.002).unwrap(),
+            Pose::from_parts(Vector::new(0.0, 0.0058, 0.0), Rotation::from_rotation_y(0.5)),
+            ConvexShape::cylinder(0.004, 0.004).unwrap(),
             Pose::IDENTITY,
         ),
     ]
