@@ -31,8 +31,8 @@
 //! - `rapier` (default): the drop-in for rapier3d-f64 scenes ([`rapier`] module).
 //! - `parallel` (default): a step's contacts are evaluated on all cores (rayon); forces are
 //!   summed in a fixed order, so results do not depend on the thread count.
-//! - `fluid`: wet runs — the [`coupling`] module (rapier bodies four-way coupled with the
-//!   bundled HLBM lattice crate, re-exported as [`hlbm`]); implies `rapier`. A dry build never
+//! - `fluid`: wet runs — the `coupling` module (rapier bodies four-way coupled with the
+//!   bundled HLBM lattice crate, re-exported as `hlbm`); implies `rapier`. A dry build never
 //!   compiles the lattice.
 //! - `checkpoint` (default): serde for every state type (this crate's, rapier's world, the
 //!   lattice) and the [`checkpoint`] module — save a run, resume it bit-identically.

@@ -155,11 +155,13 @@ pub struct OverlapGeometry {
     pub indentation: Real,
     /// Estimated area of the overlap region's surface (m²), for [`StiffnessFactor::ShapeAdaptive`](crate::StiffnessFactor::ShapeAdaptive).
     pub surface_area: Real,
-    /// The corrected box in B's frame: pass it back as `previous_box` next sub-step.
+    /// The corrected box, in the body frame the overlap was computed in (A's or B's, whichever
+    /// bounds the pair tighter; B's for the closed-form spheres): pass it back as
+    /// `previous_box` next sub-step.
     pub corrected_box: Aabb,
 }
 
-/// A body's SDF placed in B's frame: `d(x) = sdf(R^T (x - t)) - ε`.
+/// A body's SDF placed in the pair's frame (A's or B's body frame): `d(x) = sdf(R^T (x - t)) - ε`.
 pub(crate) struct Placed<'a, S: ?Sized> {
     shape: &'a S,
     rot: Matrix,
@@ -189,7 +191,7 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         self.shape.segment_crossing(self.rot_t * (inside - self.origin), self.rot_t * (outside - self.origin), self.eps)
     }
 
-    /// The body's face planes `(n, h)` in B's frame (`n·x <= h` inside), moved out by `ε`.
+    /// The body's face planes `(n, h)` in the pair's frame (`n·x <= h` inside), moved out by `ε`.
     /// A plane given with a non-unit normal is scaled to a unit one (the same half-space; the
     /// enlargement and the chord need the unit form); a zero or non-finite one gives `None`,
     /// and the pair goes to the grid.
@@ -207,7 +209,7 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
             .collect()
     }
 
-    /// The shape's bounds in B's frame, enlarged by `ε`; infinite components stay infinite.
+    /// The shape's bounds in the pair's frame, enlarged by `ε`; infinite components stay infinite.
     fn bounds(&self) -> Aabb {
         let b = self.shape.local_bounds();
         let mut mins = self.origin - Vector::splat(self.eps);
@@ -229,7 +231,8 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
     }
 }
 
-/// The pair in B's frame; `phi = max(d_A, d_B)` is negative inside the overlap.
+/// The pair in one body's frame (A's or B's, see [`compute_overlap`]); `phi = max(d_A, d_B)`
+/// is negative inside the overlap.
 pub(crate) struct Pair<'a, A: ?Sized, B: ?Sized> {
     a: Placed<'a, A>,
     b: Placed<'a, B>,
@@ -420,7 +423,7 @@ fn pose_check(what: &'static str, p: &Pose) -> Result<()> {
     }
 }
 
-/// The conservative rough box of the pair in B's frame (intersection of the bounds), or `None`
+/// The conservative rough box of the pair in its frame (intersection of the bounds), or `None`
 /// when the bounds do not meet.
 fn conservative_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>) -> Result<Option<Aabb>> {
     let Some(b) = intersect(&pair.a.bounds(), &pair.b.bounds()) else { return Ok(None) };
