@@ -11,7 +11,10 @@ const WARM_STEPS: usize = 48;
 
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("drop_in_step");
-    group.sample_size(10).measurement_time(std::time::Duration::from_secs(10)).warm_up_time(std::time::Duration::from_millis(500));
+    group
+        .sample_size(10)
+        .measurement_time(std::time::Duration::from_secs(10))
+        .warm_up_time(std::time::Duration::from_millis(500));
 
     let mut scene = bin_scene(BODIES);
     for _ in 0..WARM_STEPS {
@@ -26,16 +29,21 @@ fn bench(c: &mut Criterion) {
         contacts.step(&mut scene.world).unwrap();
     }
     eprintln!("{} contacts alive after {WARM_STEPS} steps", contacts.contact_count());
-    group.bench_function("discrete_contacts_nc4", |b| b.iter(|| contacts.step(&mut scene.world).unwrap()));
+    group.bench_function("discrete_contacts_nc4", |b| {
+        b.iter(|| contacts.step(&mut scene.world).unwrap())
+    });
 
     // The same without geometry reuse: every live contact integrated in full on every sub-step.
     let mut scene = bin_scene(BODIES);
-    let mut contacts = drop_in::discrete_contacts(4, 6.0).unwrap().with_geometry_reuse(0.0).unwrap();
+    let mut contacts =
+        drop_in::discrete_contacts(4, 6.0).unwrap().with_geometry_reuse(0.0).unwrap();
     contacts.handle_all(&mut scene.world, drop_in::rubber().unwrap()).unwrap();
     for _ in 0..WARM_STEPS {
         contacts.step(&mut scene.world).unwrap();
     }
-    group.bench_function("discrete_contacts_nc4_full_evaluations", |b| b.iter(|| contacts.step(&mut scene.world).unwrap()));
+    group.bench_function("discrete_contacts_nc4_full_evaluations", |b| {
+        b.iter(|| contacts.step(&mut scene.world).unwrap())
+    });
     group.finish();
 }
 

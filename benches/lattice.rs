@@ -19,8 +19,12 @@ fn block(c: &mut Criterion) {
     let du = [[1e-4; LANES]; 3];
     let mut g = c.benchmark_group("collide_block");
     g.throughput(Throughput::Elements(LANES as u64));
-    g.bench_function("plain", |b| b.iter(|| collide(std::hint::black_box(&mut blk), 1.0 / 0.6, None)));
-    g.bench_function("forced", |b| b.iter(|| collide(std::hint::black_box(&mut blk), 1.0 / 0.6, Some(&du))));
+    g.bench_function("plain", |b| {
+        b.iter(|| collide(std::hint::black_box(&mut blk), 1.0 / 0.6, None))
+    });
+    g.bench_function("forced", |b| {
+        b.iter(|| collide(std::hint::black_box(&mut blk), 1.0 / 0.6, Some(&du)))
+    });
     g.finish();
 }
 
@@ -32,7 +36,9 @@ fn covered(lat: &mut Lattice) {
     for cz in centres(nz) {
         for cy in centres(ny) {
             for cx in centres(nx) {
-                lat.particles.add_sphere([cx, cy, cz], 4.0, 1.0, [1e-3, 0.0, 0.0], id).expect("a sphere inside the lattice");
+                lat.particles
+                    .add_sphere([cx, cy, cz], 4.0, 1.0, [1e-3, 0.0, 0.0], id)
+                    .expect("a sphere inside the lattice");
                 id += 1;
             }
         }
@@ -45,7 +51,12 @@ fn steps(c: &mut Criterion) {
     for n in [64usize, 128] {
         g.throughput(Throughput::Elements((n * n * n) as u64));
         for threads in [1usize, 2] {
-            let cases = [("fluid", None, Storage::F64), ("forcing", Some(ForceMethod::Forcing), Storage::F64), ("exchange", Some(ForceMethod::MomentumExchange), Storage::F64), ("fluid_f32", None, Storage::F32)];
+            let cases = [
+                ("fluid", None, Storage::F64),
+                ("forcing", Some(ForceMethod::Forcing), Storage::F64),
+                ("exchange", Some(ForceMethod::MomentumExchange), Storage::F64),
+                ("fluid_f32", None, Storage::F32),
+            ];
             for (name, method, storage) in cases {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 let mut lat = Lattice::new(n, n, n, 0.6).unwrap();
@@ -55,7 +66,9 @@ fn steps(c: &mut Criterion) {
                     covered(&mut lat);
                 }
                 let id = format!("{n}^3/{threads}t/{name}");
-                g.bench_function(BenchmarkId::from_parameter(id), |b| b.iter(|| pool.install(|| lat.step().unwrap())));
+                g.bench_function(BenchmarkId::from_parameter(id), |b| {
+                    b.iter(|| pool.install(|| lat.step().unwrap()))
+                });
             }
         }
     }

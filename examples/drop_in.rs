@@ -16,7 +16,9 @@ mod common;
 
 use std::time::Instant;
 
-use discrete_contact::validation::drop_in::{self, bin_scene, kinetic_energy, BinScene, BODY_RADIUS};
+use discrete_contact::validation::drop_in::{
+    self, bin_scene, kinetic_energy, BinScene, BODY_RADIUS,
+};
 
 /// Reporting interval (s of simulated time).
 const REPORT_EVERY: f64 = 0.1;
@@ -39,7 +41,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let per_contact = args.number("--per-contact", 6.0);
     let n_c = args.number("--nc", 4.0) as usize;
     let exact = args.flag("--exact");
-    let reuse = discrete_contact::contact::check_reuse(args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE)).unwrap_or_else(|e| {
+    let reuse = discrete_contact::contact::check_reuse(
+        args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE),
+    )
+    .unwrap_or_else(|e| {
         eprintln!("--reuse: {e}");
         std::process::exit(2);
     });
@@ -58,7 +63,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         world.step();
         max_pen = max_pen.max(rapier_penetration(&world));
         if s % every == 0 {
-            println!("{:>6.2} {:>12.4e} {:>11.2} mm {:>8.2}", s as f64 * dt, kinetic_energy(&world), max_pen * 1e3, start.elapsed().as_secs_f64());
+            println!(
+                "{:>6.2} {:>12.4e} {:>11.2} mm {:>8.2}",
+                s as f64 * dt,
+                kinetic_energy(&world),
+                max_pen * 1e3,
+                start.elapsed().as_secs_f64()
+            );
         }
     }
     let rapier_wall = start.elapsed().as_secs_f64();
@@ -67,18 +78,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // 2. The same scene with the discrete contact: these lines are the drop-in (the settings,
     //    rubber E = 5 MPa, e = 0.5, friction 0.5/0.4, are in `validation::drop_in`).
     let BinScene { mut world, .. } = bin_scene(n);
-    let overlap = discrete_contact::OverlapSettings::new(n_c, discrete_contact::IntegrationMode::Subcell)?;
-    let mut contacts = drop_in::discrete_contacts_with(overlap.with_closed_form_spheres(exact).with_exact_polyhedra(exact), per_contact)?.with_geometry_reuse(reuse)?;
+    let overlap =
+        discrete_contact::OverlapSettings::new(n_c, discrete_contact::IntegrationMode::Subcell)?;
+    let mut contacts = drop_in::discrete_contacts_with(
+        overlap.with_closed_form_spheres(exact).with_exact_polyhedra(exact),
+        per_contact,
+    )?
+    .with_geometry_reuse(reuse)?;
     let handled = contacts.handle_all(&mut world, drop_in::rubber()?)?;
     // (then `contacts.step(&mut world)?` where the loop had `world.step()`)
 
     let forms = if exact { ", exact forms where they exist" } else { "" };
     println!("\ndiscrete contacts ({handled} colliders handled, sub-cell N_c = {n_c}{forms}, rubber E = 5 MPa, e = 0.5, μ = 0.5/0.4, {per_contact} sub-steps per contact time, geometry reuse {reuse}):");
-    println!("{:>6} {:>12} {:>9} {:>9} {:>10} {:>14} {:>8}", "t (s)", "KE (J)", "contacts", "sub/step", "full/c/step", "max overlap", "wall (s)");
+    println!(
+        "{:>6} {:>12} {:>9} {:>9} {:>10} {:>14} {:>8}",
+        "t (s)", "KE (J)", "contacts", "sub/step", "full/c/step", "max overlap", "wall (s)"
+    );
     let start = Instant::now();
     let (mut max_ind, mut max_sub, mut total_sub): (f64, usize, usize) = (0.0, 0, 0);
     // Full evaluations and contact-steps (a contact alive at a step's end) since the last row, and in all.
-    let (mut full, mut contact_steps, mut all_full, mut all_evaluations) = (0usize, 0usize, 0usize, 0usize);
+    let (mut full, mut contact_steps, mut all_full, mut all_evaluations) =
+        (0usize, 0usize, 0usize, 0usize);
     let mut rows = Vec::new();
     for s in 1..=steps {
         let st = contacts.step(&mut world)?;
@@ -90,10 +110,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         all_full += st.full_evaluations;
         all_evaluations += st.evaluations;
         if s % every == 0 {
-            let (t, ke, wall) = (s as f64 * dt, kinetic_energy(&world), start.elapsed().as_secs_f64());
+            let (t, ke, wall) =
+                (s as f64 * dt, kinetic_energy(&world), start.elapsed().as_secs_f64());
             let per_contact_step = full as f64 / contact_steps.max(1) as f64;
-            println!("{t:>6.2} {ke:>12.4e} {:>9} {:>9} {per_contact_step:>11.2} {:>11.3} mm {wall:>8.2}", st.contacts, max_sub, max_ind * 1e3);
-            rows.push(format!("{t},{ke},{},{max_sub},{per_contact_step},{max_ind},{wall}", st.contacts));
+            println!(
+                "{t:>6.2} {ke:>12.4e} {:>9} {:>9} {per_contact_step:>11.2} {:>11.3} mm {wall:>8.2}",
+                st.contacts,
+                max_sub,
+                max_ind * 1e3
+            );
+            rows.push(format!(
+                "{t},{ke},{},{max_sub},{per_contact_step},{max_ind},{wall}",
+                st.contacts
+            ));
             (max_sub, full, contact_steps) = (0, 0, 0);
         }
     }

@@ -40,7 +40,9 @@ use std::time::Instant;
 use std::path::PathBuf;
 
 use discrete_contact::coupling::ForceMethod;
-use discrete_contact::validation::hindered_settling::{HinderedSettling, ParticleShape, SettlingResult, SettlingRun};
+use discrete_contact::validation::hindered_settling::{
+    HinderedSettling, ParticleShape, SettlingResult, SettlingRun,
+};
 use plotters::prelude::*;
 
 /// One finished run.
@@ -71,20 +73,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .split(',')
         .map(|s| shape_named("--shapes", s))
         .collect();
-    let case_for = |shape, phi, ar, contacts| -> Result<HinderedSettling, discrete_contact::Error> {
-        let mut c = seed_case(&args, shape, phi, ar)?;
-        c.nodes_per_diameter = args.number("--nodes-per-d", if quick { 6.0 } else { 9.0 });
-        let box_d = args.number("--box-d", if quick { 8.0 } else { 15.0 });
-        c.box_nodes = (box_d * c.nodes_per_diameter).round() as usize;
-        c.duration = args.number("--duration", if quick { 100.0 } else { 200.0 });
-        c.tau = args.number("--tau", c.tau);
-        // At D = 6 Δx particles meet at up to ~0.8 m/s, where Hertz puts the seed's 5 kPa
-        // indentation past a radius (refused); quick mode stiffens them tenfold.
-        let e = args.number("--youngs", if quick { 5e4 } else { c.material.youngs_modulus() });
-        c.material = discrete_contact::Material::new(e, c.material.poisson_ratio())?;
-        c.contacts = contacts;
-        Ok(c)
-    };
+    let case_for =
+        |shape, phi, ar, contacts| -> Result<HinderedSettling, discrete_contact::Error> {
+            let mut c = seed_case(&args, shape, phi, ar)?;
+            c.nodes_per_diameter = args.number("--nodes-per-d", if quick { 6.0 } else { 9.0 });
+            let box_d = args.number("--box-d", if quick { 8.0 } else { 15.0 });
+            c.box_nodes = (box_d * c.nodes_per_diameter).round() as usize;
+            c.duration = args.number("--duration", if quick { 100.0 } else { 200.0 });
+            c.tau = args.number("--tau", c.tau);
+            // At D = 6 Δx particles meet at up to ~0.8 m/s, where Hertz puts the seed's 5 kPa
+            // indentation past a radius (refused); quick mode stiffens them tenfold.
+            let e = args.number("--youngs", if quick { 5e4 } else { c.material.youngs_modulus() });
+            c.material = discrete_contact::Material::new(e, c.material.poisson_ratio())?;
+            c.contacts = contacts;
+            Ok(c)
+        };
     let mut jobs = Vec::new();
     for &ar in &ars {
         for &phi in &phis {
@@ -180,13 +183,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .flat_map(|r| {
             r.result.samples.iter().map(move |(t, v)| {
-                format!("{},{},{},{},{:.5},{:.4}", r.case.shape.name(), r.case.volume_fraction, r.case.archimedes, r.case.contacts, t, v)
+                format!(
+                    "{},{},{},{},{:.5},{:.4}",
+                    r.case.shape.name(),
+                    r.case.volume_fraction,
+                    r.case.archimedes,
+                    r.case.contacts,
+                    t,
+                    v
+                )
             })
         })
         .collect();
-    common::write_csv(&dir.join("hindered_settling_series.csv"), "shape,phi,ar,with_contacts,t_s,v_over_vs", &series);
+    common::write_csv(
+        &dir.join("hindered_settling_series.csv"),
+        "shape,phi,ar,with_contacts,t_s,v_over_vs",
+        &series,
+    );
 
-    println!("\n{:>7} {:>5} {:>6} {:>5} {:>8} {:>8} {:>8} {:>9} {:>8} {:>7}", "shape", "phi", "Ar", "N", "<v>/v_s", "R-Z", "G-AD", "contacts", "wall s", "MLUPs");
+    println!(
+        "\n{:>7} {:>5} {:>6} {:>5} {:>8} {:>8} {:>8} {:>9} {:>8} {:>7}",
+        "shape", "phi", "Ar", "N", "<v>/v_s", "R-Z", "G-AD", "contacts", "wall s", "MLUPs"
+    );
     for r in &runs {
         println!(
             "{:>7} {:>5} {:>6} {:>5} {:>8.3} {:>8.3} {:>8.3} {:>9} {:>8.1} {:>7.1}",
@@ -205,7 +223,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Cubes against spheres at equal φ and Ar.
     for c in runs.iter().filter(|r| r.case.shape == ParticleShape::Cube) {
         if let Some(s) = runs.iter().find(|r| {
-            r.case.shape == ParticleShape::Sphere && r.case.contacts && r.case.volume_fraction == c.case.volume_fraction && r.case.archimedes == c.case.archimedes
+            r.case.shape == ParticleShape::Sphere
+                && r.case.contacts
+                && r.case.volume_fraction == c.case.volume_fraction
+                && r.case.archimedes == c.case.archimedes
         }) {
             println!(
                 "cubes at φ = {}, Ar = {}: {:.1} % slower than spheres (seed 002: 13 % at low φ to 26 % at high φ)",
@@ -216,18 +237,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     plot(&dir.join("hindered_settling.png"), &runs)?;
-    println!("\nwrote {}/hindered_settling.csv, hindered_settling_series.csv, hindered_settling.png", dir.display());
+    println!(
+        "\nwrote {}/hindered_settling.csv, hindered_settling_series.csv, hindered_settling.png",
+        dir.display()
+    );
     Ok(())
 }
 
 /// A case's checkpoint file (the file also holds the whole case and refuses another).
 fn checkpoint_path(checkpoints: &common::Checkpoints, case: &HinderedSettling) -> PathBuf {
     let contacts = if case.contacts { "contacts" } else { "no_contacts" };
-    checkpoints.file(&format!("hindered_settling_{}_phi{}_ar{}_{contacts}", case.shape.name(), case.volume_fraction, case.archimedes))
+    checkpoints.file(&format!(
+        "hindered_settling_{}_phi{}_ar{}_{contacts}",
+        case.shape.name(),
+        case.volume_fraction,
+        case.archimedes
+    ))
 }
 
 /// Runs a case (from its checkpoint with `--resume`) with a progress line every 5 s.
-fn run_with_progress(case: &HinderedSettling, checkpoints: &common::Checkpoints) -> Result<SettlingResult, discrete_contact::Error> {
+fn run_with_progress(
+    case: &HinderedSettling,
+    checkpoints: &common::Checkpoints,
+) -> Result<SettlingResult, discrete_contact::Error> {
     let path = checkpoint_path(checkpoints, case);
     let mut run = if checkpoints.resumable(&path) {
         let run = SettlingRun::load(&path, case)?;
@@ -246,7 +278,11 @@ fn run_with_progress(case: &HinderedSettling, checkpoints: &common::Checkpoints)
         if checkpoints.due(step, run.is_done()) {
             let saving = Instant::now();
             run.save(&path)?;
-            println!("  step {step:>6}: saved {} ({:.1} s)", path.display(), saving.elapsed().as_secs_f64());
+            println!(
+                "  step {step:>6}: saved {} ({:.1} s)",
+                path.display(),
+                saving.elapsed().as_secs_f64()
+            );
         }
         let el = start.elapsed().as_secs_f64();
         if el - last > 5.0 {
@@ -274,7 +310,12 @@ fn shape_named(option: &str, name: &str) -> ParticleShape {
 }
 
 /// Seed 002's case with the options every run takes (`--nc`).
-fn seed_case(args: &common::Args, shape: ParticleShape, phi: f64, ar: f64) -> Result<HinderedSettling, discrete_contact::Error> {
+fn seed_case(
+    args: &common::Args,
+    shape: ParticleShape,
+    phi: f64,
+    ar: f64,
+) -> Result<HinderedSettling, discrete_contact::Error> {
     let mut c = HinderedSettling::seed_002(shape, phi, ar)?;
     c.n_c = args.number("--nc", c.n_c as f64) as usize;
     if args.flag("--forcing-momentum") {
@@ -291,7 +332,10 @@ fn seed_case(args: &common::Args, shape: ParticleShape, phi: f64, ar: f64) -> Re
 fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
     let steps = args.number("--peer-steps", 100.0) as u64;
     let mut rows = Vec::new();
-    println!("{:>5} {:>6} {:>9} {:>8} {:>9} {:>8} {:>10} {:>8}", "phi", "N", "contacts", "s/step", "MLUPs", "OpenLB", "speed-up", "<v>/v_s");
+    println!(
+        "{:>5} {:>6} {:>9} {:>8} {:>9} {:>8} {:>10} {:>8}",
+        "phi", "N", "contacts", "s/step", "MLUPs", "OpenLB", "speed-up", "<v>/v_s"
+    );
     for (phi, openlb_with, openlb_without) in OPENLB {
         for contacts in [true, false] {
             let mut case = seed_case(args, ParticleShape::Sphere, phi, 1000.0)?;
@@ -340,25 +384,40 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
 
 /// MLUPs and seconds per 1000 steps with and without contacts at φ = 10, 20, 30 % for two
 /// box sizes (quick resolution), from rest: the contacts form during the run.
-fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+fn perf_table(
+    args: &common::Args,
+    dir: &std::path::Path,
+) -> Result<(), Box<dyn std::error::Error>> {
     let steps = args.number("--perf-steps", 600.0) as u64;
     let shape = shape_named("--perf-shape", args.value("--perf-shape").unwrap_or("sphere"));
     let mut rows = Vec::new();
-    println!("{:>5} {:>6} {:>5} {:>9} {:>8} {:>10} {:>9} {:>9} {:>10}", "box_D", "nodes", "phi", "contacts", "N", "s/1000", "MLUPs", "contacts%", "max_contacts");
+    println!(
+        "{:>5} {:>6} {:>5} {:>9} {:>8} {:>10} {:>9} {:>9} {:>10}",
+        "box_D", "nodes", "phi", "contacts", "N", "s/1000", "MLUPs", "contacts%", "max_contacts"
+    );
     for box_d in args.list("--perf-box-d", &[8.0, 15.0]) {
         for &phi in &args.list("--perf-phi", &[0.1, 0.2, 0.3]) {
             for contacts in [true, false] {
                 let mut case = seed_case(args, shape, phi, 1000.0)?;
                 case.nodes_per_diameter = 6.0;
                 case.box_nodes = (box_d * case.nodes_per_diameter) as usize;
-                case.material = discrete_contact::Material::new(5e4, case.material.poisson_ratio())?;
+                case.material =
+                    discrete_contact::Material::new(5e4, case.material.poisson_ratio())?;
                 case.contacts = contacts;
                 case.duration = steps as f64 * case.dt() * case.stokes_velocity() / case.diameter;
                 let r = run_with_progress(&case, &common::Checkpoints::default())?;
                 let share = 100.0 * r.seconds.bodies / r.wall_time;
                 println!(
                     "{:>5} {:>6} {:>5} {:>9} {:>8} {:>10.1} {:>9.2} {:>9.0} {:>10}",
-                    box_d, case.box_nodes, phi, contacts, r.particles, 1000.0 * r.seconds_per_step(), r.mlups(), share, r.max_contacts
+                    box_d,
+                    case.box_nodes,
+                    phi,
+                    contacts,
+                    r.particles,
+                    1000.0 * r.seconds_per_step(),
+                    r.mlups(),
+                    share,
+                    r.max_contacts
                 );
                 rows.push(format!(
                     "{},{},{},{},{},{},{:.3},{:.3},{:.1},{}",
@@ -388,72 +447,104 @@ fn perf_table(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn 
 /// ⟨v⟩/v_s against φ with both correlations (Ar of the first run), with and without contacts.
 fn plot(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::error::Error>> {
     common::register_fonts();
-    discrete_contact::io::replace_atomically(path, |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
-        let root = BitMapBackend::new(tmp, (1000, 700)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let mut ch = ChartBuilder::on(&root)
-            .caption("Hindered settling in a triply periodic box", ("sans-serif", 24))
-            .margin(14)
-            .x_label_area_size(45)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..0.35, 0.0..1.0)?;
-        ch.configure_mesh().x_desc("φ").y_desc("⟨v⟩ / v_s").label_style(("sans-serif", 15)).draw()?;
-        let mut ars: Vec<f64> = runs.iter().map(|r| r.case.archimedes).collect();
-        ars.sort_by(f64::total_cmp);
-        ars.dedup();
-        let colours = [RED, BLUE, GREEN];
-        for (k, &ar) in ars.iter().enumerate() {
-            let colour = colours[k % colours.len()];
-            let Some(any) = runs.iter().find(|r| r.case.archimedes == ar) else { continue };
-            let curve = |f: &dyn Fn(&HinderedSettling) -> f64| -> Vec<(f64, f64)> {
-                (0..=35)
-                    .map(|i| {
-                        let mut c = any.case.clone();
-                        c.volume_fraction = i as f64 / 100.0;
-                        (c.volume_fraction, f(&c))
-                    })
-                    .collect()
-            };
-            let rz = colour.mix(0.6).stroke_width(1);
-            ch.draw_series(LineSeries::new(curve(&|c| c.richardson_zaki()), rz))?
-                .label(format!("Richardson–Zaki, Ar = {ar}"))
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], rz));
-            ch.draw_series(DashedLineSeries::new(curve(&|c| c.garside_al_dibouni()), 6, 4, rz))?
+    discrete_contact::io::replace_atomically(
+        path,
+        |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
+            let root = BitMapBackend::new(tmp, (1000, 700)).into_drawing_area();
+            root.fill(&WHITE)?;
+            let mut ch = ChartBuilder::on(&root)
+                .caption("Hindered settling in a triply periodic box", ("sans-serif", 24))
+                .margin(14)
+                .x_label_area_size(45)
+                .y_label_area_size(60)
+                .build_cartesian_2d(0.0..0.35, 0.0..1.0)?;
+            ch.configure_mesh()
+                .x_desc("φ")
+                .y_desc("⟨v⟩ / v_s")
+                .label_style(("sans-serif", 15))
+                .draw()?;
+            let mut ars: Vec<f64> = runs.iter().map(|r| r.case.archimedes).collect();
+            ars.sort_by(f64::total_cmp);
+            ars.dedup();
+            let colours = [RED, BLUE, GREEN];
+            for (k, &ar) in ars.iter().enumerate() {
+                let colour = colours[k % colours.len()];
+                let Some(any) = runs.iter().find(|r| r.case.archimedes == ar) else { continue };
+                let curve = |f: &dyn Fn(&HinderedSettling) -> f64| -> Vec<(f64, f64)> {
+                    (0..=35)
+                        .map(|i| {
+                            let mut c = any.case.clone();
+                            c.volume_fraction = i as f64 / 100.0;
+                            (c.volume_fraction, f(&c))
+                        })
+                        .collect()
+                };
+                let rz = colour.mix(0.6).stroke_width(1);
+                ch.draw_series(LineSeries::new(curve(&|c| c.richardson_zaki()), rz))?
+                    .label(format!("Richardson–Zaki, Ar = {ar}"))
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], rz));
+                ch.draw_series(DashedLineSeries::new(
+                    curve(&|c| c.garside_al_dibouni()),
+                    6,
+                    4,
+                    rz,
+                ))?
                 .label(format!("Garside–Al-Dibouni, Ar = {ar}"))
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], rz));
-            for (shape, contacts, label) in [
-                (ParticleShape::Sphere, true, "spheres, contacts"),
-                (ParticleShape::Sphere, false, "spheres, no contacts"),
-                (ParticleShape::Cube, true, "cubes, contacts"),
-            ] {
-                let pts: Vec<(f64, f64)> = runs
-                    .iter()
-                    .filter(|r| r.case.archimedes == ar && r.case.shape == shape && r.case.contacts == contacts)
-                    .map(|r| (r.case.volume_fraction, r.result.v_mean_over_vs))
-                    .collect();
-                if pts.is_empty() {
-                    continue;
-                }
-                let style = colour.filled();
-                let label = format!("{label}, Ar = {ar}");
-                match (shape, contacts) {
-                    (ParticleShape::Sphere, true) => {
-                        ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, style)))?.label(label).legend(move |(x, y)| Circle::new((x + 9, y), 6, style));
+                for (shape, contacts, label) in [
+                    (ParticleShape::Sphere, true, "spheres, contacts"),
+                    (ParticleShape::Sphere, false, "spheres, no contacts"),
+                    (ParticleShape::Cube, true, "cubes, contacts"),
+                ] {
+                    let pts: Vec<(f64, f64)> = runs
+                        .iter()
+                        .filter(|r| {
+                            r.case.archimedes == ar
+                                && r.case.shape == shape
+                                && r.case.contacts == contacts
+                        })
+                        .map(|r| (r.case.volume_fraction, r.result.v_mean_over_vs))
+                        .collect();
+                    if pts.is_empty() {
+                        continue;
                     }
-                    (ParticleShape::Sphere, false) => {
-                        let s = colour.stroke_width(2);
-                        ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, s)))?.label(label).legend(move |(x, y)| Circle::new((x + 9, y), 6, s));
-                    }
-                    (ParticleShape::Cube, _) => {
-                        ch.draw_series(pts.iter().map(|&p| Rectangle::new([(p.0 - 0.004, p.1 - 0.012), (p.0 + 0.004, p.1 + 0.012)], style)))?
+                    let style = colour.filled();
+                    let label = format!("{label}, Ar = {ar}");
+                    match (shape, contacts) {
+                        (ParticleShape::Sphere, true) => {
+                            ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, style)))?
+                                .label(label)
+                                .legend(move |(x, y)| Circle::new((x + 9, y), 6, style));
+                        }
+                        (ParticleShape::Sphere, false) => {
+                            let s = colour.stroke_width(2);
+                            ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, s)))?
+                                .label(label)
+                                .legend(move |(x, y)| Circle::new((x + 9, y), 6, s));
+                        }
+                        (ParticleShape::Cube, _) => {
+                            ch.draw_series(pts.iter().map(|&p| {
+                                Rectangle::new(
+                                    [(p.0 - 0.004, p.1 - 0.012), (p.0 + 0.004, p.1 + 0.012)],
+                                    style,
+                                )
+                            }))?
                             .label(label)
-                            .legend(move |(x, y)| Rectangle::new([(x + 4, y - 5), (x + 14, y + 5)], style));
+                            .legend(move |(x, y)| {
+                                Rectangle::new([(x + 4, y - 5), (x + 14, y + 5)], style)
+                            });
+                        }
                     }
                 }
             }
-        }
-        ch.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 13)).position(SeriesLabelPosition::UpperRight).draw()?;
-        root.present()?;
-        Ok(())
-    })
+            ch.configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()?;
+            root.present()?;
+            Ok(())
+        },
+    )
 }

@@ -34,17 +34,21 @@ fn main() {
     let cases = cases as usize;
     let worst = args.number("--worst", f64::INFINITY);
     let mut rng = polyhedra::Rng(0x9E37_79B9_7F4A_7C15);
-    let settings: Vec<(IntegrationMode, usize)> = [IntegrationMode::Subcell, IntegrationMode::Count]
-        .into_iter()
-        .flat_map(|m| [4usize, 8, 16].map(|n| (m, n)))
-        .collect();
+    let settings: Vec<(IntegrationMode, usize)> =
+        [IntegrationMode::Subcell, IntegrationMode::Count]
+            .into_iter()
+            .flat_map(|m| [4usize, 8, 16].map(|n| (m, n)))
+            .collect();
     let k = settings.len();
-    let (mut first, mut persistent, mut point, mut missed) = (vec![vec![]; k], vec![vec![]; k], vec![vec![]; k], vec![0usize; k]);
+    let (mut first, mut persistent, mut point, mut missed) =
+        (vec![vec![]; k], vec![vec![]; k], vec![vec![]; k], vec![0usize; k]);
     for case_index in 0..cases {
         let case = polyhedra::case(&mut rng, case_index);
         for (j, &(mode, n_c)) in settings.iter().enumerate() {
             let s = OverlapSettings::new(n_c, mode).unwrap();
-            let eval = |previous: Option<&parry3d_f64::bounding_volume::Aabb>| compute_overlap(&case.a, &case.pose_a, &case.b, &case.pose_b, &s, previous).unwrap();
+            let eval = |previous: Option<&parry3d_f64::bounding_volume::Aabb>| {
+                compute_overlap(&case.a, &case.pose_a, &case.b, &case.pose_b, &s, previous).unwrap()
+            };
             let Some(g) = eval(None) else {
                 missed[j] += 1;
                 first[j].push(1.0);
@@ -74,7 +78,15 @@ fn main() {
         }
     }
     println!("{cases} pairs (half boxes, half hulls), error against the exact polyhedron:");
-    println!("{:>8} {:>4} {:>30} {:>30} {:>20} {:>7}", "mode", "N_c", "volume, first: median p90 worst", "persistent: median p90 worst", "point: median worst", "missed");
+    println!(
+        "{:>8} {:>4} {:>30} {:>30} {:>20} {:>7}",
+        "mode",
+        "N_c",
+        "volume, first: median p90 worst",
+        "persistent: median p90 worst",
+        "point: median worst",
+        "missed"
+    );
     for (j, (mode, n_c)) in settings.iter().enumerate() {
         let (f, p, c) = (spread(&first[j]), spread(&persistent[j]), spread(&point[j]));
         let mode = format!("{mode:?}").to_lowercase();

@@ -15,19 +15,32 @@ use rayon::prelude::*;
 
 fn main() {
     let filter = std::env::args().nth(1).unwrap_or_default();
-    let cases: Vec<Case> = Case::matrix().into_iter().filter(|c| c.describe().contains(&filter)).collect();
+    let cases: Vec<Case> =
+        Case::matrix().into_iter().filter(|c| c.describe().contains(&filter)).collect();
     println!("{:<58} {:<10} {:>10} {:>9} {:>9}", "case", "outcome", "error", "substeps", "wall s");
     // Rows appear as cases finish (two at a time).
     let outcomes: Vec<_> = cases
         .par_iter()
         .map(|c| {
             let o = c.run();
-            println!("{:<58} {:<10} {:>10.2e} {:>9} {:>9.2}", c.describe(), o.verdict, o.error, o.substeps, o.wall_time_s);
+            println!(
+                "{:<58} {:<10} {:>10.2e} {:>9} {:>9.2}",
+                c.describe(),
+                o.verdict,
+                o.error,
+                o.substeps,
+                o.wall_time_s
+            );
             o
         })
         .collect();
     let failed = outcomes.iter().filter(|o| o.verdict.starts_with("FAILED")).count();
-    println!("\n{} cases, {} ok, {} refused with advice, {failed} failed", cases.len(), outcomes.iter().filter(|o| o.verdict == "ok").count(), outcomes.iter().filter(|o| o.verdict == "refused").count());
+    println!(
+        "\n{} cases, {} ok, {} refused with advice, {failed} failed",
+        cases.len(),
+        outcomes.iter().filter(|o| o.verdict == "ok").count(),
+        outcomes.iter().filter(|o| o.verdict == "refused").count()
+    );
     if filter.is_empty() || filter == "precision" {
         precision_table();
     }
@@ -47,7 +60,16 @@ fn precision_table() {
     };
     let rows: Vec<String> = Impact::cases()
         .par_iter()
-        .map(|c| format!("{:>8.0e} {:>7} {:>10} {:>12} {:>12}", c.youngs, c.speed, c.offset, show(c.run(false)), show(c.run(true))))
+        .map(|c| {
+            format!(
+                "{:>8.0e} {:>7} {:>10} {:>12} {:>12}",
+                c.youngs,
+                c.speed,
+                c.offset,
+                show(c.run(false)),
+                show(c.run(true))
+            )
+        })
         .collect();
     rows.iter().for_each(|r| println!("{r}"));
 }

@@ -46,7 +46,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dxs = args.list("--dx", if quick { &[1.0, 0.75] } else { &[0.6, 0.3] });
     let h0s = args.list("--h0", &[5.5, 19.6, 35.7]);
     let bx = args.list("--box", &[42.0, 42.0, 50.0]);
-    let vtk_every = args.value("--vtk-every-ms").map(|v| v.parse::<f64>().expect("--vtk-every-ms: a number") * 1e-3);
+    let vtk_every = args
+        .value("--vtk-every-ms")
+        .map(|v| v.parse::<f64>().expect("--vtk-every-ms: a number") * 1e-3);
     let case_for = |h0_mm: f64, dx_mm: f64, contact: bool| -> WetRebound {
         let mut c = WetRebound::li_2010(h0_mm * 1e-3, dx_mm * 1e-3);
         c.radius = args.number("--radius", 4.75) * 1e-3;
@@ -96,13 +98,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut runs = Vec::new();
     for (h0, dx, contact) in jobs {
         let case = case_for(h0, dx, contact);
-        let settings = format!("h0 = {h0} mm, Δx = {dx} mm, Δt = {:.2} µs, {}", case.dt * 1e6, if contact { "with contact" } else { "no contact" });
+        let settings = format!(
+            "h0 = {h0} mm, Δx = {dx} mm, Δt = {:.2} µs, {}",
+            case.dt * 1e6,
+            if contact { "with contact" } else { "no contact" }
+        );
         println!("\n{settings}");
         let start = Instant::now();
         let mut last_print = 0.0;
         let mut next_vtk = 0.0;
         let steps_max = (case.end_time / case.dt).ceil();
-        let path = checkpoints.file(&format!("wet_rebound_h{h0}_dx{dx}_{}", if contact { "contact" } else { "no_contact" }));
+        let path = checkpoints.file(&format!(
+            "wet_rebound_h{h0}_dx{dx}_{}",
+            if contact { "contact" } else { "no_contact" }
+        ));
         let mut run = if checkpoints.resumable(&path) {
             let run = ReboundRun::load(&path, &case)?;
             println!("  resumed from {} at step {}", path.display(), run.trajectory().steps);
@@ -125,7 +134,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let mlups = done * tr.cells as f64 / el / 1e6;
                 let eta = el * ((steps_max - first as f64) / done - 1.0);
                 let gap = tr.samples.last().map_or(0.0, |s| s.1);
-                println!("  step {:>6}  t = {:.4} s  gap = {:>7.3} mm  {:>6.1} MLUPs  ETA ≤ {:.0} s", tr.steps, t, gap * 1e3, mlups, eta);
+                println!(
+                    "  step {:>6}  t = {:.4} s  gap = {:>7.3} mm  {:>6.1} MLUPs  ETA ≤ {:.0} s",
+                    tr.steps,
+                    t,
+                    gap * 1e3,
+                    mlups,
+                    eta
+                );
             }
             if let Some(every) = vtk_every {
                 if t >= next_vtk {
@@ -163,7 +179,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("\nEffective restitution (speeds at a gap of 5 % of D) against Legendre et al. (2006), e/e_dry = exp(-35/St):");
     println!(
         "{:>6} {:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>8} {:>8} {:>8} {:>8} {:>9}",
-        "h0", "dx", "t_imp", "U_in", "U_out", "h_reb", "St", "e/e_dry", "Legendre", "error", "wall s", "contact"
+        "h0",
+        "dx",
+        "t_imp",
+        "U_in",
+        "U_out",
+        "h_reb",
+        "St",
+        "e/e_dry",
+        "Legendre",
+        "error",
+        "wall s",
+        "contact"
     );
     let mut summary = Vec::new();
     for r in &runs {
@@ -234,37 +261,68 @@ fn report(case: &WetRebound, t: &Trajectory) {
 
 /// Gap over time like seed 000's Fig. 7: finest resolution solid, coarser thin, no contact
 /// dashed.
-fn plot(path: &std::path::Path, runs: &[Run], finest: f64) -> Result<(), Box<dyn std::error::Error>> {
+fn plot(
+    path: &std::path::Path,
+    runs: &[Run],
+    finest: f64,
+) -> Result<(), Box<dyn std::error::Error>> {
     common::register_fonts();
-    discrete_contact::io::replace_atomically(path, |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
-        let root = BitMapBackend::new(tmp, (1100, 700)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let t_max = runs.iter().flat_map(|r| r.traj.samples.last()).map(|s| s.0).fold(0.0, f64::max);
-        let h_max = runs.iter().map(|r| r.h0).fold(0.0, f64::max) * 1.05;
-        let mut ch = ChartBuilder::on(&root)
-            .caption("Sphere rebound in glycerol–water (Li 2010 setup)", ("sans-serif", 24))
-            .margin(14)
-            .x_label_area_size(45)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..t_max, -1.0..h_max)?;
-        ch.configure_mesh().x_desc("t (s)").y_desc("gap h (mm)").label_style(("sans-serif", 15)).draw()?;
-        let colours = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK];
-        let mut h0s: Vec<f64> = runs.iter().map(|r| r.h0).collect();
-        h0s.dedup();
-        for r in runs {
-            let k = h0s.iter().position(|&h| h == r.h0).unwrap_or(0);
-            let colour = colours[k % colours.len()];
-            let pts: Vec<(f64, f64)> = r.traj.samples.iter().map(|s| (s.0, s.1 * 1e3)).collect();
-            let label = format!("h0 = {} mm, Δx = {} mm{}", r.h0, r.dx, if r.contact { "" } else { ", no contact" });
-            let style = if r.contact && r.dx == finest { colour.stroke_width(2) } else { colour.mix(0.5).stroke_width(1) };
-            if r.contact {
-                ch.draw_series(LineSeries::new(pts, style))?.label(label).legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
-            } else {
-                ch.draw_series(DashedLineSeries::new(pts, 6, 4, style))?.label(label).legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
+    discrete_contact::io::replace_atomically(
+        path,
+        |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
+            let root = BitMapBackend::new(tmp, (1100, 700)).into_drawing_area();
+            root.fill(&WHITE)?;
+            let t_max =
+                runs.iter().flat_map(|r| r.traj.samples.last()).map(|s| s.0).fold(0.0, f64::max);
+            let h_max = runs.iter().map(|r| r.h0).fold(0.0, f64::max) * 1.05;
+            let mut ch = ChartBuilder::on(&root)
+                .caption("Sphere rebound in glycerol–water (Li 2010 setup)", ("sans-serif", 24))
+                .margin(14)
+                .x_label_area_size(45)
+                .y_label_area_size(60)
+                .build_cartesian_2d(0.0..t_max, -1.0..h_max)?;
+            ch.configure_mesh()
+                .x_desc("t (s)")
+                .y_desc("gap h (mm)")
+                .label_style(("sans-serif", 15))
+                .draw()?;
+            let colours = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK];
+            let mut h0s: Vec<f64> = runs.iter().map(|r| r.h0).collect();
+            h0s.dedup();
+            for r in runs {
+                let k = h0s.iter().position(|&h| h == r.h0).unwrap_or(0);
+                let colour = colours[k % colours.len()];
+                let pts: Vec<(f64, f64)> =
+                    r.traj.samples.iter().map(|s| (s.0, s.1 * 1e3)).collect();
+                let label = format!(
+                    "h0 = {} mm, Δx = {} mm{}",
+                    r.h0,
+                    r.dx,
+                    if r.contact { "" } else { ", no contact" }
+                );
+                let style = if r.contact && r.dx == finest {
+                    colour.stroke_width(2)
+                } else {
+                    colour.mix(0.5).stroke_width(1)
+                };
+                if r.contact {
+                    ch.draw_series(LineSeries::new(pts, style))?
+                        .label(label)
+                        .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
+                } else {
+                    ch.draw_series(DashedLineSeries::new(pts, 6, 4, style))?
+                        .label(label)
+                        .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
+                }
             }
-        }
-        ch.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 13)).position(SeriesLabelPosition::UpperRight).draw()?;
-        root.present()?;
-        Ok(())
-    })
+            ch.configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()?;
+            root.present()?;
+            Ok(())
+        },
+    )
 }

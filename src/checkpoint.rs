@@ -95,7 +95,12 @@ pub fn save<T: Serialize + ?Sized>(path: &Path, kind: &str, state: &T) -> Result
         problem(path, CheckpointProblem::Encode(why))
     })?;
     let label = |s: &str| -> Result<u16> {
-        u16::try_from(s.len()).map_err(|_| problem(path, CheckpointProblem::Encode(format!("label longer than 65535 bytes: {s:.40}…"))))
+        u16::try_from(s.len()).map_err(|_| {
+            problem(
+                path,
+                CheckpointProblem::Encode(format!("label longer than 65535 bytes: {s:.40}…")),
+            )
+        })
     };
     let (writer, kind_len) = (writer(), label(kind)?);
     write_atomically(path, |w| {
@@ -131,8 +136,14 @@ pub fn load<T: DeserializeOwned>(path: &Path, kind: &str) -> Result<T> {
     REFUSED.with(|r| r.borrow_mut().take());
     match postcard::take_from_bytes(payload) {
         Ok((state, [])) => Ok(state),
-        Ok((_, rest)) => Err(decode(format!("{} bytes left over: the file holds a larger state", rest.len()))),
-        Err(e) => Err(decode(REFUSED.with(|r| r.borrow_mut().take()).map_or_else(|| e.to_string(), |refused| refused.to_string()))),
+        Ok((_, rest)) => {
+            Err(decode(format!("{} bytes left over: the file holds a larger state", rest.len())))
+        }
+        Err(e) => Err(decode(
+            REFUSED
+                .with(|r| r.borrow_mut().take())
+                .map_or_else(|| e.to_string(), |refused| refused.to_string()),
+        )),
     }
 }
 

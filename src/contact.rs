@@ -142,9 +142,12 @@ impl Reference {
         // (not when both turn alike, as in B's frame under a spinning B, nor for a ball
         // spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels across the
         // grid by the shift plus the roll.
-        let turn = ((gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1])).length();
+        let turn =
+            ((gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1])).length();
         let tilt = TILT_WEIGHT * turn * self.reach;
-        if !(deepening.abs() + tilt <= fraction * self.indentation && across + chord * self.lever <= fraction * self.cell) {
+        if !(deepening.abs() + tilt <= fraction * self.indentation
+            && across + chord * self.lever <= fraction * self.cell)
+        {
             return None;
         }
         // The overlap grows as if similar about its deepest point: its depth `D = d / rate`
@@ -156,7 +159,10 @@ impl Reference {
         }
         let p = self.exponent;
         // The normal turns as the surfaces' own normal there does.
-        let (before, now) = ((self.gradients[1] - self.gradients[0]).normalize_or_zero(), (gradients[1] - gradients[0]).normalize_or_zero());
+        let (before, now) = (
+            (self.gradients[1] - self.gradients[0]).normalize_or_zero(),
+            (gradients[1] - gradients[0]).normalize_or_zero(),
+        );
         if before == Vector::ZERO || now == Vector::ZERO || !now.is_finite() {
             return None;
         }
@@ -222,7 +228,11 @@ impl Reference {
 }
 
 /// The bodies' distance gradients at `x` (B's frame, A at `relative` in it): A's, then B's.
-fn surface_gradients<A: Sdf + ?Sized, B: Sdf + ?Sized>((a, b): (&A, &B), relative: &Pose, x: Vector) -> [Vector; 2] {
+fn surface_gradients<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    (a, b): (&A, &B),
+    relative: &Pose,
+    x: Vector,
+) -> [Vector; 2] {
     [relative.rotation * a.gradient(relative.inverse_transform_point(x)), b.gradient(x)]
 }
 
@@ -246,7 +256,10 @@ const MIN_LOG_INDENTATION_STEP: Real = 0.05;
 /// measure [`volume_exponent`](crate::force::volume_exponent) and a rate of 1.
 fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry) -> (Real, Real) {
     let Some(r) = previous else {
-        return (crate::force::volume_exponent(g.volume, g.indentation, g.surface_area).clamp(1.0, 3.0), 1.0);
+        return (
+            crate::force::volume_exponent(g.volume, g.indentation, g.surface_area).clamp(1.0, 3.0),
+            1.0,
+        );
     };
     let step = (g.indentation / r.indentation).ln();
     let exponent = (g.volume / r.volume).ln() / step;
@@ -262,7 +275,15 @@ fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry
 /// fraction itself, or [`Error::InvalidParameter`](crate::Error::InvalidParameter) naming
 /// `geometry_reuse` outside `0 <= fraction <= 100`.
 pub fn check_reuse(fraction: Real) -> Result<Real> {
-    crate::error::check_range("geometry_reuse", fraction, 0.0, true, 100.0, true, "0 <= fraction <= 100")
+    crate::error::check_range(
+        "geometry_reuse",
+        fraction,
+        0.0,
+        true,
+        100.0,
+        true,
+        "0 <= fraction <= 100",
+    )
 }
 
 /// A's body frame in B's body frame.
@@ -340,13 +361,29 @@ impl ContactModel {
         a.kinematics.check("kinematics of body A")?;
         b.kinematics.check("kinematics of body B")?;
         let relative = relative_pose(&a.pose, &b.pose);
-        let updated = state.as_ref().filter(|_| self.reuse > 0.0).and_then(|s| s.reference.as_ref()?.update((a.shape, b.shape), &relative, &b.pose, s.corrected_box, self.reuse));
+        let updated = state.as_ref().filter(|_| self.reuse > 0.0).and_then(|s| {
+            s.reference.as_ref()?.update(
+                (a.shape, b.shape),
+                &relative,
+                &b.pose,
+                s.corrected_box,
+                self.reuse,
+            )
+        });
         let full = updated.is_none();
         let geometry = match updated {
             Some(g) => g,
             None => {
                 let previous = state.as_ref().map(|s| s.corrected_box);
-                let Some(g) = compute_overlap(a.shape, &a.pose, b.shape, &b.pose, &self.settings, previous.as_ref())? else {
+                let Some(g) = compute_overlap(
+                    a.shape,
+                    &a.pose,
+                    b.shape,
+                    &b.pose,
+                    &self.settings,
+                    previous.as_ref(),
+                )?
+                else {
                     *state = None;
                     return Ok(None);
                 };
@@ -354,7 +391,8 @@ impl ContactModel {
             }
         };
         let x = geometry.contact_point;
-        let approach = -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
+        let approach =
+            -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
         let s = state.get_or_insert_with(|| ContactState {
             damping: self.params.damping_for(approach),
             reference_approach_speed: approach,
@@ -374,15 +412,30 @@ impl ContactModel {
         if full {
             s.corrected_box = geometry.corrected_box;
             // An exact form (closed-form spheres, exact polyhedra) costs less than an update.
-            let reuse = self.reuse > 0.0 && !crate::overlap::has_exact_form(a.shape, b.shape, &self.settings);
-            s.reference = reuse.then(|| self.reference(relative, s.reference.as_ref(), a, b, &geometry));
+            let reuse = self.reuse > 0.0
+                && !crate::overlap::has_exact_form(a.shape, b.shape, &self.settings);
+            s.reference =
+                reuse.then(|| self.reference(relative, s.reference.as_ref(), a, b, &geometry));
         }
         let carried = s.tangential.carried(&a.pose, &b.pose, geometry.normal);
-        let (force, spring) =
-            contact_force_with_history(&self.params, s.damping, &geometry, &a.kinematics, &b.kinematics, carried, s.tangential.sliding);
+        let (force, spring) = contact_force_with_history(
+            &self.params,
+            s.damping,
+            &geometry,
+            &a.kinematics,
+            &b.kinematics,
+            carried,
+            s.tangential.sliding,
+        );
         s.normal_stiffness = force.stiffness;
         if self.params.tangential == crate::TangentialLaw::Spring {
-            s.tangential.record(spring.displacement, spring.sliding, geometry.contact_point, &a.pose, &b.pose);
+            s.tangential.record(
+                spring.displacement,
+                spring.sliding,
+                geometry.contact_point,
+                &a.pose,
+                &b.pose,
+            );
         }
         Ok(Some(ContactOutput { geometry, force, full }))
     }
@@ -405,8 +458,15 @@ impl ContactModel {
         // Each body's bounding-sphere centre (its own frame), and its distance from the contact
         // point; infinite for an unbounded body.
         let (sphere_a, sphere_b) = (a.shape.bounding_sphere(), b.shape.bounding_sphere());
-        let radius = |(_, r): (Vector, Real), in_b: Vector| if r.is_finite() { (in_b - contact_point).length() } else { Real::INFINITY };
-        let (r_a, r_b) = (radius(sphere_a, relative.transform_point(sphere_a.0)), radius(sphere_b, sphere_b.0));
+        let radius = |(_, r): (Vector, Real), in_b: Vector| {
+            if r.is_finite() {
+                (in_b - contact_point).length()
+            } else {
+                Real::INFINITY
+            }
+        };
+        let (r_a, r_b) =
+            (radius(sphere_a, relative.transform_point(sphere_a.0)), radius(sphere_b, sphere_b.0));
         let centres = [sphere_a.0, sphere_b.0];
         Reference {
             relative,

@@ -76,7 +76,11 @@ impl FluidSettings {
     /// density `rho` (kg/m³); refuses a relaxation time `τ = 1/2 + 3 ν Δt/Δx² ≤ 1/2`. The
     /// smoothing width of `d_B` is one `dx` (change it with [`with_smoothing`](Self::with_smoothing)).
     pub fn new(dx: Real, dt: Real, nu: Real, rho: Real) -> Result<Self> {
-        Ok(Self { units: UnitConverter::new(dx, dt, nu, rho)?, smoothing: dx, force: ForceMethod::default() })
+        Ok(Self {
+            units: UnitConverter::new(dx, dt, nu, rho)?,
+            smoothing: dx,
+            force: ForceMethod::default(),
+        })
     }
 
     /// How the lattice measures the fluid's force on the bodies (see [`ForceMethod`]): Wen et
@@ -89,7 +93,15 @@ impl FluidSettings {
 
     /// With a smoothing width `eps` (m) of the solid fraction, `0 < eps <= 4 dx`.
     pub fn with_smoothing(mut self, eps: Real) -> Result<Self> {
-        self.smoothing = crate::error::check_range("smoothing", eps, 0.0, false, 4.0 * self.units.dx(), true, "0 < eps <= 4 dx")?;
+        self.smoothing = crate::error::check_range(
+            "smoothing",
+            eps,
+            0.0,
+            false,
+            4.0 * self.units.dx(),
+            true,
+            "0 < eps <= 4 dx",
+        )?;
         Ok(self)
     }
 
@@ -185,7 +197,12 @@ impl Fluid {
 
     /// Fluid at rest filling `[min, max]`, periodic along the axes marked `true` and closed by
     /// resting walls on the faces of the others.
-    pub fn new(min: Vector, max: Vector, periodic: [bool; 3], settings: FluidSettings) -> Result<Self> {
+    pub fn new(
+        min: Vector,
+        max: Vector,
+        periodic: [bool; 3],
+        settings: FluidSettings,
+    ) -> Result<Self> {
         crate::error::check_finite_vec("fluid box min", min)?;
         crate::error::check_finite_vec("fluid box max", max)?;
         let dx = settings.units.dx();
@@ -199,19 +216,31 @@ impl Fluid {
             rounded[d] = min[d] + cells as Real * dx;
             // Periodic: cell centres at min + (i + 1/2) dx. Walled: solid layers 0 and n - 1,
             // the halfway walls half a cell inside them, on the box faces.
-            (dims[d], origin[d]) = if periodic[d] { (cells, min[d] + 0.5 * dx) } else { (cells + 2, min[d] - 0.5 * dx) };
+            (dims[d], origin[d]) = if periodic[d] {
+                (cells, min[d] + 0.5 * dx)
+            } else {
+                (cells + 2, min[d] - 0.5 * dx)
+            };
         }
         let mut lattice = Lattice::new(dims[0], dims[1], dims[2], settings.units.tau())?;
         lattice.close_faces(periodic);
         lattice.set_force_method(settings.force);
         let domain = PeriodicBox::new(min, rounded, periodic)?;
-        Ok(Self { lattice, units: settings.units, smoothing: settings.smoothing, origin, domain, bodies: Vec::new() })
+        Ok(Self {
+            lattice,
+            units: settings.units,
+            smoothing: settings.smoothing,
+            origin,
+            domain,
+            bodies: Vec::new(),
+        })
     }
 
     /// Couples the body of `collider` (a dynamic body with a bounded convex shape) to the fluid.
     pub fn couple(&mut self, world: &PhysicsWorld, collider: ColliderHandle) -> Result<()> {
         let bad = |allowed| Error::InvalidParameter { name: "collider", value: Real::NAN, allowed };
-        let co = world.colliders.get(collider).ok_or(bad("a handle of a collider in this world"))?;
+        let co =
+            world.colliders.get(collider).ok_or(bad("a handle of a collider in this world"))?;
         let body = co.parent().filter(|&h| world.bodies.get(h).is_some_and(|rb| rb.is_dynamic()));
         let body = body.ok_or(bad("a collider attached to a dynamic rigid body"))?;
         let shape = ConvexShape::from_parry(co.shape())?;
@@ -220,7 +249,15 @@ impl Fluid {
         }
         let volume = co.shape().mass_properties(1.0).mass();
         let z = Vector::ZERO;
-        self.bodies.push(Coupled { collider, body, shape, volume, previous: (z, z, z), force: z, torque: z });
+        self.bodies.push(Coupled {
+            collider,
+            body,
+            shape,
+            volume,
+            previous: (z, z, z),
+            force: z,
+            torque: z,
+        });
         Ok(())
     }
 
@@ -231,7 +268,11 @@ impl Fluid {
     ///
     /// Fails with the lattice's [`hlbm::Error::Unstable`] (step and node) when the fluid blows
     /// up, and with the contacts' errors.
-    pub fn step(&mut self, world: &mut PhysicsWorld, contacts: Option<&mut DiscreteContacts>) -> Result<FluidStepReport> {
+    pub fn step(
+        &mut self,
+        world: &mut PhysicsWorld,
+        contacts: Option<&mut DiscreteContacts>,
+    ) -> Result<FluidStepReport> {
         if let Some(c) = &contacts {
             if c.periodic() != self.periodic_box().as_ref() {
                 return Err(Error::InvalidParameter {
@@ -273,7 +314,8 @@ impl Fluid {
             }
         };
         crate::rapier::take_back(world, &applied);
-        report.seconds.bodies = clock.elapsed().as_secs_f64() - report.seconds.mapping - report.seconds.lattice;
+        report.seconds.bodies =
+            clock.elapsed().as_secs_f64() - report.seconds.mapping - report.seconds.lattice;
         report.contacts = result?;
         Ok(report)
     }
@@ -283,7 +325,11 @@ impl Fluid {
     ///
     /// Slab by slab on all cores: each z-slab evaluates the SDFs of the bodies that reach into
     /// it; the corrections are summed per body in slab order (thread-count independent).
-    fn map_bodies(&mut self, world: &PhysicsWorld, report: &mut FluidStepReport) -> Result<Vec<(Vector, Vector)>> {
+    fn map_bodies(
+        &mut self,
+        world: &PhysicsWorld,
+        report: &mut FluidStepReport,
+    ) -> Result<Vec<(Vector, Vector)>> {
         let dx = self.units.dx();
         let dims = self.lattice.dims();
         let to_lattice = self.units.velocity_to_lattice(1.0);
@@ -294,7 +340,10 @@ impl Fluid {
         // Which bodies reach into each slab, and as which unwrapped layer k.
         let mut by_slab: Vec<Vec<(usize, i64)>> = vec![Vec::new(); dims[2]];
         for (id, b) in self.bodies.iter_mut().enumerate() {
-            let (Some(rb), Some(co)) = (world.bodies.get(b.body), world.colliders.get(b.collider)) else { continue };
+            let (Some(rb), Some(co)) = (world.bodies.get(b.body), world.colliders.get(b.collider))
+            else {
+                continue;
+            };
             let (pose, com, v, w) = (*co.position(), rb.center_of_mass(), rb.linvel(), rb.angvel());
             crate::error::check_finite_vec("coupled body velocity", v)?;
             crate::error::check_finite_vec("coupled body angular velocity", w)?;
@@ -314,7 +363,17 @@ impl Fluid {
                 by_slab[k.rem_euclid(dims[2] as i64) as usize].push((placed.len(), k));
             }
             let base = [0, 1, 2].map(|d| ranges[d].0.div_euclid(dims[d] as i64) * dims[d] as i64);
-            placed.push(Placed { id, shape: &b.shape, inverse: pose.inverse(), com, v, w, previous: b.previous, ranges, base });
+            placed.push(Placed {
+                id,
+                shape: &b.shape,
+                inverse: pose.inverse(),
+                com,
+                v,
+                w,
+                previous: b.previous,
+                ranges,
+                base,
+            });
             b.previous = (v, w, com);
         }
         // Each slab's bodies from low x to high, so that a row gets its nodes in order unless
@@ -329,7 +388,9 @@ impl Fluid {
             .iter()
             .map(|b| ParticleBody {
                 id: b.id as u32,
-                centre: ((b.com - self.origin) / dx - Vector::from_array(b.base.map(|n| n as Real))).to_array(),
+                centre: ((b.com - self.origin) / dx
+                    - Vector::from_array(b.base.map(|n| n as Real)))
+                .to_array(),
                 velocity: (b.v * to_lattice).to_array(),
                 spin: (b.w * dt).to_array(),
             })
@@ -365,15 +426,27 @@ impl Fluid {
                 for j in b.ranges[1].0..=b.ranges[1].1 {
                     let y = wrap(j, 1);
                     let (image_y, image_z) = (image(j - b.base[1], 1), image(k - b.base[2], 2));
-                    let first = b.inverse * (origin + Vector::new(lo as Real, j as Real, k as Real) * dx);
+                    let first =
+                        b.inverse * (origin + Vector::new(lo as Real, j as Real, k as Real) * dx);
                     for i in lo..=b.ranges[0].1 {
-                        let d_b = solid_fraction(b.shape.distance(first + step * (i - lo) as Real), smoothing);
+                        let d_b = solid_fraction(
+                            b.shape.distance(first + step * (i - lo) as Real),
+                            smoothing,
+                        );
                         let x = x_lo + (i - lo) as usize;
                         let x = if x >= dims[0] { x - dims[0] } else { x };
                         if d_b <= 0.0 || walls && lattice.is_solid(lattice.index(x, y, z)) {
                             continue;
                         }
-                        rows.push(y, ParticleNode::new(x, body, [image(i - b.base[0], 0), image_y, image_z], d_b));
+                        rows.push(
+                            y,
+                            ParticleNode::new(
+                                x,
+                                body,
+                                [image(i - b.base[0], 0), image_y, image_z],
+                                d_b,
+                            ),
+                        );
                         // The inner fluid's momentum change, removed from the lattice's force.
                         if inner_fluid {
                             let p = origin + Vector::new(i as Real, j as Real, k as Real) * dx;
@@ -429,10 +502,15 @@ impl Fluid {
         }
         let [nx, ny, nz] = self.lattice.dims();
         let periodic = self.domain.periodic();
-        let fluid_cells = [nx, ny, nz].iter().zip(periodic).map(|(&n, p)| (if p { n } else { n - 2 }) as Real).product::<Real>();
+        let fluid_cells = [nx, ny, nz]
+            .iter()
+            .zip(periodic)
+            .map(|(&n, p)| (if p { n } else { n - 2 }) as Real)
+            .product::<Real>();
         let a = -weight / (rho * fluid_cells * self.units.dx().powi(3));
         crate::error::check_finite_vec("balance acceleration", a)?;
-        self.lattice.set_body_acceleration(a.to_array().map(|c| self.units.acceleration_to_lattice(c)));
+        self.lattice
+            .set_body_acceleration(a.to_array().map(|c| self.units.acceleration_to_lattice(c)));
         Ok(a)
     }
 
@@ -479,6 +557,11 @@ impl Fluid {
 
     /// Writes density, velocity and `d_B` as legacy VTK for ParaView (atomically).
     pub fn write_vtk(&self, path: &std::path::Path) -> Result<()> {
-        Ok(hlbm::vtk::write(&self.lattice, path, self.units.dx(), self.units.velocity_to_physical(1.0))?)
+        Ok(hlbm::vtk::write(
+            &self.lattice,
+            path,
+            self.units.dx(),
+            self.units.velocity_to_physical(1.0),
+        )?)
     }
 }

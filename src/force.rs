@@ -100,7 +100,12 @@ pub(crate) fn volume_exponent(v: Real, d: Real, s: Real) -> Real {
 }
 
 /// Normal force magnitude `F_n = max(0, E* k sqrt(V d) (1 + c ḋ))`.
-pub fn normal_force(params: &PairParameters, damping: Real, geometry: &OverlapGeometry, approach_speed: Real) -> Real {
+pub fn normal_force(
+    params: &PairParameters,
+    damping: Real,
+    geometry: &OverlapGeometry,
+    approach_speed: Real,
+) -> Real {
     (elastic_force(params, geometry) * (1.0 + damping * approach_speed)).max(0.0)
 }
 
@@ -141,7 +146,8 @@ pub fn contact_force_with_history(
     let mut force = n * f_n;
     let mut f_t = 0.0;
     let v_t = v_ab - n * v_n;
-    let mut spring = SpringForce { force_on_a: Vector::ZERO, displacement: Vector::ZERO, sliding: false };
+    let mut spring =
+        SpringForce { force_on_a: Vector::ZERO, displacement: Vector::ZERO, sliding: false };
     if !params.friction.is_none() && f_el > 0.0 {
         match params.tangential {
             TangentialLaw::SlipSpeed => {
@@ -154,7 +160,15 @@ pub fn contact_force_with_history(
             TangentialLaw::Spring => {
                 let k_t = params.tangential_stiffness_ratio * k_n;
                 let eta_t = tangential::damping(params, k_t, damping, f_el);
-                spring = tangential::spring_force(&params.friction, k_t, eta_t, f_n, carried, v_t, was_sliding);
+                spring = tangential::spring_force(
+                    &params.friction,
+                    k_t,
+                    eta_t,
+                    f_n,
+                    carried,
+                    v_t,
+                    was_sliding,
+                );
                 force += spring.force_on_a;
                 f_t = spring.force_on_a.length();
             }

@@ -21,13 +21,17 @@ pub(crate) fn io_error(path: &Path, e: impl std::fmt::Display) -> Error {
 ///
 /// Errors: [`Error::Io`] naming the path when the folder cannot hold the file or the rename
 /// fails; `write`'s own error is passed on unchanged.
-pub fn replace_atomically<E: From<Error>>(path: &Path, write: impl FnOnce(&Path) -> core::result::Result<(), E>) -> core::result::Result<(), E> {
+pub fn replace_atomically<E: From<Error>>(
+    path: &Path,
+    write: impl FnOnce(&Path) -> core::result::Result<(), E>,
+) -> core::result::Result<(), E> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let extension = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+    let extension =
+        path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
     // The target's extension last, so writers that pick a format by extension see the right one.
     let (prefix, suffix) = (format!(".{name}."), format!(".partial{extension}"));
     let mut builder = tempfile::Builder::new();
@@ -35,10 +39,7 @@ pub fn replace_atomically<E: From<Error>>(path: &Path, write: impl FnOnce(&Path)
     // Ordinary file permissions (the process's umask applies), not a temporary file's 0600.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let tmp = builder
-        .tempfile_in(dir)
-        .map_err(|e| E::from(io_error(path, e)))?
-        .into_temp_path();
+    let tmp = builder.tempfile_in(dir).map_err(|e| E::from(io_error(path, e)))?.into_temp_path();
     write(&tmp)?;
     File::open(&tmp).and_then(|f| f.sync_all()).map_err(|e| E::from(io_error(&tmp, e)))?;
     tmp.persist(path).map_err(|e| E::from(io_error(path, e.error)))?;
@@ -54,7 +55,10 @@ pub fn replace_atomically<E: From<Error>>(path: &Path, write: impl FnOnce(&Path)
 /// assert_eq!(std::fs::read_to_string(&path).unwrap(), "t,x\n0,1\n");
 /// # Ok::<(), discrete_contact::Error>(())
 /// ```
-pub fn write_atomically(path: &Path, write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>) -> Result<()> {
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<()> {
     replace_atomically(path, |tmp: &Path| -> Result<()> {
         let mut w = BufWriter::new(File::create(tmp).map_err(|e| io_error(tmp, e))?);
         write(&mut w).and_then(|()| w.flush()).map_err(|e| io_error(tmp, e))

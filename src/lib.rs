@@ -147,9 +147,9 @@ pub mod error;
 pub mod force;
 pub mod io;
 pub mod material;
-pub mod overlap;
 #[cfg(feature = "rapier")]
 mod neighbours;
+pub mod overlap;
 pub mod periodic;
 #[cfg(feature = "rapier")]
 pub mod rapier;
@@ -164,8 +164,13 @@ pub struct ReadmeDoctests;
 
 pub use contact::{BodyState, ContactModel, ContactOutput, ContactState};
 pub use error::{Error, Result};
-pub use force::{contact_force, contact_force_with_history, normal_force, BodyKinematics, ContactForce};
-pub use material::{damping_from_restitution, effective_modulus, hertz_contact_time, Friction, Material, PairParameters, StiffnessFactor};
+pub use force::{
+    contact_force, contact_force_with_history, normal_force, BodyKinematics, ContactForce,
+};
+pub use material::{
+    damping_from_restitution, effective_modulus, hertz_contact_time, Friction, Material,
+    PairParameters, StiffnessFactor,
+};
 pub use overlap::{compute_overlap, IntegrationMode, OverlapGeometry, OverlapSettings};
 pub use shape::{ConvexShape, Sdf};
 pub use tangential::TangentialLaw;
@@ -191,7 +196,7 @@ pub use hlbm;
 pub mod prelude {
     pub use crate::math::{Pose, Real, Rotation, Vector};
     pub use crate::{
-        BodyKinematics, BodyState, ContactModel, ConvexShape, Friction, IntegrationMode, Material, OverlapSettings,
-        PairParameters, Sdf, StiffnessFactor, TangentialLaw,
+        BodyKinematics, BodyState, ContactModel, ConvexShape, Friction, IntegrationMode, Material,
+        OverlapSettings, PairParameters, Sdf, StiffnessFactor, TangentialLaw,
     };
 }

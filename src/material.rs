@@ -20,7 +20,15 @@ impl Material {
     pub fn new(youngs_modulus: Real, poisson_ratio: Real) -> Result<Self> {
         Ok(Self {
             youngs_modulus: check_positive("youngs_modulus", youngs_modulus)?,
-            poisson_ratio: check_range("poisson_ratio", poisson_ratio, 0.0, true, 0.5, true, "0 <= nu <= 0.5")?,
+            poisson_ratio: check_range(
+                "poisson_ratio",
+                poisson_ratio,
+                0.0,
+                true,
+                0.5,
+                true,
+                "0 <= nu <= 0.5",
+            )?,
         })
     }
 
@@ -95,10 +103,15 @@ pub struct Friction {
 
 impl Friction {
     /// No friction: the tangential force is skipped entirely.
-    pub const NONE: Friction = Friction { static_coefficient: 0.0, kinetic_coefficient: 0.0, transition_speed: 1.0 };
+    pub const NONE: Friction =
+        Friction { static_coefficient: 0.0, kinetic_coefficient: 0.0, transition_speed: 1.0 };
 
     /// `mu_s >= mu_k >= 0`, `v_s > 0`.
-    pub fn new(static_coefficient: Real, kinetic_coefficient: Real, transition_speed: Real) -> Result<Self> {
+    pub fn new(
+        static_coefficient: Real,
+        kinetic_coefficient: Real,
+        transition_speed: Real,
+    ) -> Result<Self> {
         let mu_k = check_non_negative("kinetic_coefficient", kinetic_coefficient)?;
         let mu_s = check_non_negative("static_coefficient", static_coefficient)?;
         if mu_s < mu_k {
@@ -108,7 +121,11 @@ impl Friction {
                 allowed: "finite and >= kinetic_coefficient",
             });
         }
-        Ok(Self { static_coefficient: mu_s, kinetic_coefficient: mu_k, transition_speed: check_positive("transition_speed", transition_speed)? })
+        Ok(Self {
+            static_coefficient: mu_s,
+            kinetic_coefficient: mu_k,
+            transition_speed: check_positive("transition_speed", transition_speed)?,
+        })
     }
 
     /// Whether this friction does nothing (`mu_s = 0`).
@@ -214,7 +231,15 @@ impl PairParameters {
         Ok(Self {
             effective_modulus: effective_modulus(a, b),
             stiffness: StiffnessFactor::Curved,
-            restitution: check_range("restitution", restitution, 0.0, false, 1.0, true, "0 < e <= 1")?,
+            restitution: check_range(
+                "restitution",
+                restitution,
+                0.0,
+                false,
+                1.0,
+                true,
+                "0 < e <= 1",
+            )?,
             friction: Friction::NONE,
             tangential: TangentialLaw::SlipSpeed,
             tangential_stiffness_ratio: crate::tangential::stiffness_ratio(a, b),
@@ -239,7 +264,11 @@ impl PairParameters {
     /// not move): the tangential spring is then damped to the restitution's damping ratio.
     pub fn with_tangential_mass(mut self, m_t: Real) -> Result<Self> {
         if !(m_t > 0.0) {
-            return Err(Error::InvalidParameter { name: "tangential_mass", value: m_t, allowed: "> 0 (kg), infinite allowed" });
+            return Err(Error::InvalidParameter {
+                name: "tangential_mass",
+                value: m_t,
+                allowed: "> 0 (kg), infinite allowed",
+            });
         }
         self.tangential_mass = Some(m_t);
         Ok(self)
@@ -262,7 +291,8 @@ impl PairParameters {
 
     /// Damping constant for a contact first seen at normal approach speed `v0`.
     pub fn damping_for(&self, v0: Real) -> Real {
-        let v = if v0.is_finite() { v0.max(self.min_approach_speed) } else { self.min_approach_speed };
+        let v =
+            if v0.is_finite() { v0.max(self.min_approach_speed) } else { self.min_approach_speed };
         restitution_parameter(self.restitution) / v
     }
 }

@@ -40,7 +40,12 @@ impl NeighbourList {
     /// nearest `i`), in index order; rebuilds the list first when it cannot answer. The
     /// spheres must be the same bodies, in the same order, at every call (a caller that
     /// changes them starts a new list).
-    pub(crate) fn query(&mut self, spheres: &[Sphere], reach: &[Real], periodic: Option<&PeriodicBox>) -> Result<Vec<(usize, usize, Vector)>> {
+    pub(crate) fn query(
+        &mut self,
+        spheres: &[Sphere],
+        reach: &[Real],
+        periodic: Option<&PeriodicBox>,
+    ) -> Result<Vec<(usize, usize, Vector)>> {
         if !self.answers(spheres, reach, periodic) {
             self.build(spheres, reach, periodic)?;
         }
@@ -49,8 +54,11 @@ impl NeighbourList {
             .iter()
             .filter_map(|&(i, j)| {
                 let (a, b) = (&spheres[i], &spheres[j]);
-                let shift = periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
-                ((b.centre + shift - a.centre).length() <= a.radius + b.radius + reach[i] + reach[j]).then_some((i, j, shift))
+                let shift =
+                    periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
+                ((b.centre + shift - a.centre).length()
+                    <= a.radius + b.radius + reach[i] + reach[j])
+                    .then_some((i, j, shift))
             })
             .collect())
     }
@@ -64,27 +72,41 @@ impl NeighbourList {
     fn answers(&self, spheres: &[Sphere], reach: &[Real], periodic: Option<&PeriodicBox>) -> bool {
         self.anchors.len() == spheres.len()
             && spheres.iter().zip(reach).zip(&self.anchors).all(|((s, &r), &anchor)| {
-                let moved = anchor + periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(s.centre, anchor)) - s.centre;
+                let moved = anchor
+                    + periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(s.centre, anchor))
+                    - s.centre;
                 moved.length() + r <= 0.5 * self.skin
             })
     }
 
-    fn build(&mut self, spheres: &[Sphere], reach: &[Real], periodic: Option<&PeriodicBox>) -> Result<()> {
+    fn build(
+        &mut self,
+        spheres: &[Sphere],
+        reach: &[Real],
+        periodic: Option<&PeriodicBox>,
+    ) -> Result<()> {
         let smallest = spheres.iter().map(|s| s.radius).fold(Real::INFINITY, Real::min);
         let largest = spheres.iter().map(|s| s.radius).fold(0.0, Real::max);
         let farthest = reach.iter().copied().fold(0.0, Real::max);
         let mut skin = SKIN_FRACTION * smallest;
         if let Some(p) = periodic {
             // Keep the skin inside what the box allows (the nearest image must stay unique).
-            let shortest = (0..3).filter(|&d| p.periodic()[d]).map(|d| p.lengths()[d]).fold(Real::INFINITY, Real::min);
+            let shortest = (0..3)
+                .filter(|&d| p.periodic()[d])
+                .map(|d| p.lengths()[d])
+                .fold(Real::INFINITY, Real::min);
             skin = skin.min(0.5 * shortest - 2.0 * largest);
         }
         skin = skin.max(4.0 * farthest);
         if let Some(p) = periodic {
             p.check_reach(2.0 * largest + skin)?;
         }
-        let grown: Vec<Sphere> = spheres.iter().map(|s| Sphere { centre: s.centre, radius: s.radius + 0.5 * skin }).collect();
-        self.pairs = overlapping_spheres(&grown, periodic).into_iter().map(|(i, j, _)| (i, j)).collect();
+        let grown: Vec<Sphere> = spheres
+            .iter()
+            .map(|s| Sphere { centre: s.centre, radius: s.radius + 0.5 * skin })
+            .collect();
+        self.pairs =
+            overlapping_spheres(&grown, periodic).into_iter().map(|(i, j, _)| (i, j)).collect();
         self.anchors = spheres.iter().map(|s| s.centre).collect();
         self.skin = skin;
         self.builds += 1;
@@ -97,13 +119,20 @@ mod tests {
     use super::*;
 
     /// Brute force: every pair within reach, through the periodic faces.
-    fn brute(spheres: &[Sphere], reach: &[Real], periodic: Option<&PeriodicBox>) -> Vec<(usize, usize)> {
+    fn brute(
+        spheres: &[Sphere],
+        reach: &[Real],
+        periodic: Option<&PeriodicBox>,
+    ) -> Vec<(usize, usize)> {
         let mut out = Vec::new();
         for i in 0..spheres.len() {
             for j in i + 1..spheres.len() {
                 let (a, b) = (&spheres[i], &spheres[j]);
-                let shift = periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
-                if (b.centre + shift - a.centre).length() <= a.radius + b.radius + reach[i] + reach[j] {
+                let shift =
+                    periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
+                if (b.centre + shift - a.centre).length()
+                    <= a.radius + b.radius + reach[i] + reach[j]
+                {
                     out.push((i, j));
                 }
             }
@@ -120,21 +149,37 @@ mod tests {
             seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (seed >> 11) as Real / (1u64 << 53) as Real
         };
-        for periodic in [Some(PeriodicBox::new(Vector::ZERO, Vector::splat(1.0), [true, true, false]).unwrap()), None] {
+        for periodic in [
+            Some(PeriodicBox::new(Vector::ZERO, Vector::splat(1.0), [true, true, false]).unwrap()),
+            None,
+        ] {
             let mut spheres: Vec<Sphere> = (0..300)
-                .map(|_| Sphere { centre: Vector::new(rand(), rand(), rand()), radius: 0.02 + 0.02 * rand() })
+                .map(|_| Sphere {
+                    centre: Vector::new(rand(), rand(), rand()),
+                    radius: 0.02 + 0.02 * rand(),
+                })
                 .collect();
-            let velocity: Vec<Vector> = (0..300).map(|_| Vector::new(rand() - 0.5, rand() - 0.5, rand() - 0.5) * 4e-4).collect();
+            let velocity: Vec<Vector> = (0..300)
+                .map(|_| Vector::new(rand() - 0.5, rand() - 0.5, rand() - 0.5) * 4e-4)
+                .collect();
             let mut list = NeighbourList::default();
             let mut found = 0;
             for step in 0..200 {
-                let reach: Vec<Real> = (0..300).map(|i| if step % 2 == 0 { 1e-3 } else { 1e-3 + velocity[i].length() }).collect();
+                let reach: Vec<Real> = (0..300)
+                    .map(|i| if step % 2 == 0 { 1e-3 } else { 1e-3 + velocity[i].length() })
+                    .collect();
                 let pairs = list.query(&spheres, &reach, periodic.as_ref()).unwrap();
                 let expected = brute(&spheres, &reach, periodic.as_ref());
-                assert_eq!(pairs.iter().map(|&(i, j, _)| (i, j)).collect::<Vec<_>>(), expected, "step {step}");
+                assert_eq!(
+                    pairs.iter().map(|&(i, j, _)| (i, j)).collect::<Vec<_>>(),
+                    expected,
+                    "step {step}"
+                );
                 for &(i, j, shift) in &pairs {
                     let image = spheres[j].centre + shift;
-                    let direct = periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(spheres[i].centre, spheres[j].centre));
+                    let direct = periodic.map_or(Vector::ZERO, |p| {
+                        p.nearest_image_shift(spheres[i].centre, spheres[j].centre)
+                    });
                     assert_eq!(image, spheres[j].centre + direct);
                 }
                 found += pairs.len();

@@ -89,7 +89,13 @@ impl PeriodicBox {
     pub fn nearest_image_shift(&self, a: Vector, b: Vector) -> Vector {
         let l = self.lengths();
         let delta = b - a;
-        Vector::from_array(std::array::from_fn(|d| if self.periodic[d] { -(delta[d] / l[d]).round() * l[d] } else { 0.0 }))
+        Vector::from_array(std::array::from_fn(|d| {
+            if self.periodic[d] {
+                -(delta[d] / l[d]).round() * l[d]
+            } else {
+                0.0
+            }
+        }))
     }
 
     /// The shift that moves `p` back into `[min, max)` along the periodic axes (zero when it is
@@ -138,8 +144,16 @@ pub struct Sphere {
 /// A uniform cell list of cell size the largest diameter: `O(n)` for bodies of similar size.
 /// The pairs come sorted by `(i, j)`, whatever the hash order, so callers that sum forces in
 /// this order get the same result on every run.
-pub fn overlapping_spheres(spheres: &[Sphere], periodic: Option<&PeriodicBox>) -> Vec<(usize, usize, Vector)> {
-    let Some(h) = spheres.iter().map(|s| 2.0 * s.radius).reduce(Real::max).filter(|&h| h > 0.0 && h.is_finite()) else {
+pub fn overlapping_spheres(
+    spheres: &[Sphere],
+    periodic: Option<&PeriodicBox>,
+) -> Vec<(usize, usize, Vector)> {
+    let Some(h) = spheres
+        .iter()
+        .map(|s| 2.0 * s.radius)
+        .reduce(Real::max)
+        .filter(|&h| h > 0.0 && h.is_finite())
+    else {
         return Vec::new();
     };
     // Along a periodic axis with fewer than 3 cells, every body is every body's neighbour
@@ -147,7 +161,11 @@ pub fn overlapping_spheres(spheres: &[Sphere], periodic: Option<&PeriodicBox>) -
     let cells: [i64; 3] = std::array::from_fn(|d| match periodic {
         Some(b) if b.periodic[d] => {
             let n = (b.lengths()[d] / h).floor() as i64;
-            if n >= 3 { n } else { 1 }
+            if n >= 3 {
+                n
+            } else {
+                1
+            }
         }
         _ => 0,
     });
@@ -156,7 +174,8 @@ pub fn overlapping_spheres(spheres: &[Sphere], periodic: Option<&PeriodicBox>) -
         std::array::from_fn(|d| {
             if cells[d] > 0 {
                 let l = periodic.map_or(1.0, |b| b.lengths()[d]);
-                let i = (((p[d] - origin[d]) / l).rem_euclid(1.0) * cells[d] as Real).floor() as i64;
+                let i =
+                    (((p[d] - origin[d]) / l).rem_euclid(1.0) * cells[d] as Real).floor() as i64;
                 (i.min(cells[d] - 1) + offset[d]).rem_euclid(cells[d])
             } else {
                 ((p[d] - origin[d]) / h).floor() as i64 + offset[d]
@@ -173,7 +192,8 @@ pub fn overlapping_spheres(spheres: &[Sphere], periodic: Option<&PeriodicBox>) -
                     let list = buckets.get(key(a.centre, [ox, oy, oz]));
                     for &j in list.iter().filter(|&&j| j > i) {
                         let b = &spheres[j];
-                        let shift = periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
+                        let shift = periodic
+                            .map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
                         if (b.centre + shift - a.centre).length() <= a.radius + b.radius {
                             pairs.push((i, j, shift));
                         }
@@ -249,7 +269,12 @@ mod tests {
     /// The cell list finds exactly the pairs a brute-force minimum-image search finds.
     #[test]
     fn cell_list_matches_brute_force() {
-        let b = PeriodicBox::new(Vector::new(-1.0, 0.0, 2.0), Vector::new(2.0, 1.5, 4.5), [true, true, false]).unwrap();
+        let b = PeriodicBox::new(
+            Vector::new(-1.0, 0.0, 2.0),
+            Vector::new(2.0, 1.5, 4.5),
+            [true, true, false],
+        )
+        .unwrap();
         let mut seed = 12345u64;
         let mut next = || {
             seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -257,18 +282,25 @@ mod tests {
         };
         let spheres: Vec<Sphere> = (0..300)
             .map(|_| Sphere {
-                centre: Vector::new(-1.0 + 3.0 * next(), 1.5 * next(), 2.0 + 2.5 * next() + if next() < 0.1 { 3.0 } else { 0.0 }),
+                centre: Vector::new(
+                    -1.0 + 3.0 * next(),
+                    1.5 * next(),
+                    2.0 + 2.5 * next() + if next() < 0.1 { 3.0 } else { 0.0 },
+                ),
                 radius: 0.05 + 0.1 * next(),
             })
             .collect();
-        let all = PeriodicBox::new(Vector::new(-1.0, 0.0, 2.0), Vector::new(2.0, 1.5, 4.5), [true; 3]).unwrap();
+        let all =
+            PeriodicBox::new(Vector::new(-1.0, 0.0, 2.0), Vector::new(2.0, 1.5, 4.5), [true; 3])
+                .unwrap();
         for periodic in [Some(&b), Some(&all), None] {
             let fast = overlapping_spheres(&spheres, periodic);
             let mut brute = Vec::new();
             for i in 0..spheres.len() {
                 for j in i + 1..spheres.len() {
                     let (a, c) = (spheres[i], spheres[j]);
-                    let s = periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, c.centre));
+                    let s = periodic
+                        .map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, c.centre));
                     if (c.centre + s - a.centre).length() <= a.radius + c.radius {
                         brute.push((i, j, s));
                     }
@@ -281,13 +313,18 @@ mod tests {
 
     #[test]
     fn wrap_and_images() {
-        let b = PeriodicBox::new(Vector::ZERO, Vector::new(2.0, 1.0, 1.0), [true, false, true]).unwrap();
+        let b = PeriodicBox::new(Vector::ZERO, Vector::new(2.0, 1.0, 1.0), [true, false, true])
+            .unwrap();
         assert_eq!(b.wrap_shift(Vector::new(-0.5, 7.0, 0.5)), Vector::new(2.0, 0.0, 0.0));
         assert_eq!(b.wrap_shift(Vector::new(2.0, -7.0, 2.5)), Vector::new(-2.0, 0.0, -2.0));
-        assert_eq!(b.nearest_image_shift(Vector::new(0.1, 0.0, 0.9), Vector::new(1.9, 0.9, 0.1)), Vector::new(-2.0, 0.0, 1.0));
+        assert_eq!(
+            b.nearest_image_shift(Vector::new(0.1, 0.0, 0.9), Vector::new(1.9, 0.9, 0.1)),
+            Vector::new(-2.0, 0.0, 1.0)
+        );
         assert!(b.check_reach(0.6).is_err());
         assert!(b.check_reach(0.5).is_ok());
         assert!(PeriodicBox::new(Vector::ZERO, Vector::new(1.0, -1.0, 1.0), [true; 3]).is_err());
-        assert!(PeriodicBox::new(Vector::ZERO, Vector::new(1.0, -1.0, 1.0), [true, false, true]).is_ok());
+        assert!(PeriodicBox::new(Vector::ZERO, Vector::new(1.0, -1.0, 1.0), [true, false, true])
+            .is_ok());
     }
 }

@@ -40,17 +40,19 @@
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
 
 use rapier3d_f64::prelude::{
-    ActiveHooks, Collider, ColliderHandle, ContactModificationContext, EventHandler, PairFilterContext, PhysicsHooks, PhysicsWorld,
-    RigidBodyHandle, RigidBodyType, SolverFlags,
+    ActiveHooks, Collider, ColliderHandle, ContactModificationContext, EventHandler,
+    PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodyType, SolverFlags,
 };
 
 use crate::contact::{BodyState, ContactModel, ContactState};
 use crate::error::{check_positive, Error, Result};
 use crate::force::BodyKinematics;
-use crate::material::{effective_modulus, hertz_contact_time, Friction, Material, PairParameters, StiffnessFactor};
+use crate::material::{
+    effective_modulus, hertz_contact_time, Friction, Material, PairParameters, StiffnessFactor,
+};
 use crate::math::{Pose, Real, Vector};
-use crate::overlap::OverlapSettings;
 use crate::neighbours::NeighbourList;
+use crate::overlap::OverlapSettings;
 use crate::periodic::{PeriodicBox, Sphere};
 use crate::shape::{ConvexShape, Sdf};
 use crate::tangential::{stiffness_ratio, TangentialLaw};
@@ -267,7 +269,15 @@ impl DiscreteContacts {
     /// (default 0.5). Softened materials — seed 002 runs E = 5 kPa particles so that contacts
     /// span many fluid steps — need a larger fraction.
     pub fn with_indentation_limit(mut self, fraction: Real) -> Result<Self> {
-        self.indentation_limit = crate::error::check_range("indentation_limit", fraction, 0.0, false, 1.0, true, "0 < fraction <= 1")?;
+        self.indentation_limit = crate::error::check_range(
+            "indentation_limit",
+            fraction,
+            0.0,
+            false,
+            1.0,
+            true,
+            "0 < fraction <= 1",
+        )?;
         Ok(self)
     }
 
@@ -323,13 +333,25 @@ impl DiscreteContacts {
     /// [`MIN_SUBSTEPS_PER_CONTACT`]): fewer sub-steps are cheaper and less accurate (a settling
     /// pile needs far fewer than a restitution measurement).
     pub fn with_substeps_per_contact(mut self, n: Real) -> Result<Self> {
-        self.substeps_per_contact =
-            crate::error::check_range("substeps_per_contact", n, MIN_SUBSTEPS_PER_CONTACT, true, 1e6, true, "5 <= n <= 1e6")?;
+        self.substeps_per_contact = crate::error::check_range(
+            "substeps_per_contact",
+            n,
+            MIN_SUBSTEPS_PER_CONTACT,
+            true,
+            1e6,
+            true,
+            "5 <= n <= 1e6",
+        )?;
         Ok(self)
     }
 
     /// Hands `collider` to the discrete contact (its shape must be convex) with `material`.
-    pub fn handle(&mut self, world: &mut PhysicsWorld, collider: ColliderHandle, material: Material) -> Result<()> {
+    pub fn handle(
+        &mut self,
+        world: &mut PhysicsWorld,
+        collider: ColliderHandle,
+        material: Material,
+    ) -> Result<()> {
         let co = world.colliders.get_mut(collider).ok_or(Error::InvalidParameter {
             name: "collider",
             value: Real::NAN,
@@ -338,13 +360,16 @@ impl DiscreteContacts {
         let shape = ConvexShape::from_parry(co.shape())?;
         let (centre, radius) = shape.bounding_sphere();
         let b = shape.local_bounds();
-        let half_size = if radius.is_finite() { (b.maxs - b.mins).min_element() * 0.5 } else { Real::INFINITY };
+        let half_size =
+            if radius.is_finite() { (b.maxs - b.mins).min_element() * 0.5 } else { Real::INFINITY };
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
         self.handled.insert(collider, Handled { shape, material, centre, radius, half_size });
         // A gap measured for another shape or size bounds nothing now, nor does a live
         // contact's last full geometry.
         self.gaps.clear();
-        for (_, state) in self.states.iter_mut().filter(|((a, b), _)| *a == collider || *b == collider) {
+        for (_, state) in
+            self.states.iter_mut().filter(|((a, b), _)| *a == collider || *b == collider)
+        {
             state.reference = None;
         }
         self.generation += 1;
@@ -380,12 +405,18 @@ impl DiscreteContacts {
     }
 
     /// One step with the user's hooks and event handler.
-    pub fn step_with_events(&mut self, world: &mut PhysicsWorld, hooks: &dyn PhysicsHooks, events: &dyn EventHandler) -> Result<StepStats> {
+    pub fn step_with_events(
+        &mut self,
+        world: &mut PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+        events: &dyn EventHandler,
+    ) -> Result<StepStats> {
         let dt = world.integration_parameters.dt;
         check_positive("integration_parameters.dt", dt)?;
         let builds = self.neighbour_builds();
         let substeps = self.substeps(world, dt)?;
-        let saved = (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
+        let saved =
+            (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
         world.integration_parameters.dt = dt / substeps as Real;
         world.integration_parameters.num_solver_iterations = 1;
         let mut stats = StepStats { substeps, ..Default::default() };
@@ -442,12 +473,19 @@ impl DiscreteContacts {
         }
     }
 
-    fn kinematics(world: &PhysicsWorld, c: ColliderHandle) -> (Pose, BodyKinematics, Option<RigidBodyHandle>, Real) {
+    fn kinematics(
+        world: &PhysicsWorld,
+        c: ColliderHandle,
+    ) -> (Pose, BodyKinematics, Option<RigidBodyHandle>, Real) {
         let co = &world.colliders[c];
         let pose = *co.position();
         match co.parent().and_then(|h| world.bodies.get(h).map(|rb| (h, rb))) {
             Some((h, rb)) => {
-                let k = BodyKinematics { center_of_mass: rb.center_of_mass(), linvel: rb.linvel(), angvel: rb.angvel() };
+                let k = BodyKinematics {
+                    center_of_mass: rb.center_of_mass(),
+                    linvel: rb.linvel(),
+                    angvel: rb.angvel(),
+                };
                 let mass = if rb.is_dynamic() { rb.mass() } else { Real::INFINITY };
                 (pose, k, Some(h), mass)
             }
@@ -459,7 +497,9 @@ impl DiscreteContacts {
     /// at distance `r` from its centre (r infinite: a half-space, not rotated by it); zero for a
     /// body that does not move.
     fn tangential_compliance(world: &PhysicsWorld, c: ColliderHandle, r: Real) -> Real {
-        let Some(rb) = world.colliders[c].parent().and_then(|h| world.bodies.get(h)) else { return 0.0 };
+        let Some(rb) = world.colliders[c].parent().and_then(|h| world.bodies.get(h)) else {
+            return 0.0;
+        };
         if !rb.is_dynamic() {
             return 0.0;
         }
@@ -471,8 +511,13 @@ impl DiscreteContacts {
 
     /// The pair's effective mass against a tangential load at the contact, `1/Σ(1/m + r²/I_min)`
     /// (kg); infinite when neither body moves, zero while a mass is not yet computed.
-    fn tangential_mass(world: &PhysicsWorld, (ca, ha): (ColliderHandle, &Handled), (cb, hb): (ColliderHandle, &Handled)) -> Real {
-        1.0 / (Self::tangential_compliance(world, ca, ha.radius) + Self::tangential_compliance(world, cb, hb.radius))
+    fn tangential_mass(
+        world: &PhysicsWorld,
+        (ca, ha): (ColliderHandle, &Handled),
+        (cb, hb): (ColliderHandle, &Handled),
+    ) -> Real {
+        1.0 / (Self::tangential_compliance(world, ca, ha.radius)
+            + Self::tangential_compliance(world, cb, hb.radius))
     }
 
     fn params(&self, a: &Handled, b: &Handled) -> Result<PairParameters> {
@@ -487,7 +532,11 @@ impl DiscreteContacts {
     ///
     /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
     /// candidates' order afterwards, so the result does not depend on the thread count.
-    fn apply_forces(&mut self, world: &mut PhysicsWorld, stats: &mut StepStats) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
+    fn apply_forces(
+        &mut self,
+        world: &mut PhysicsWorld,
+        stats: &mut StepStats,
+    ) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
         let pairs = self.candidate_pairs(world)?;
         let eps = self.settings.enlargement();
         let this = &*self;
@@ -510,8 +559,13 @@ impl DiscreteContacts {
                         return Ok((None, Some(*gap)));
                     }
                 }
-                let margin = parry3d_f64::query::distance(&pa, w.colliders[ca].shape(), &pb, w.colliders[cb].shape())
-                    .map_or(Real::NAN, |d| d.distance - (eps[0] + eps[1]));
+                let margin = parry3d_f64::query::distance(
+                    &pa,
+                    w.colliders[ca].shape(),
+                    &pb,
+                    w.colliders[cb].shape(),
+                )
+                .map_or(Real::NAN, |d| d.distance - (eps[0] + eps[1]));
                 if margin > 0.0 {
                     return Ok((None, Some(Gap { margin, poses: (pa, pb) })));
                 }
@@ -519,14 +573,27 @@ impl DiscreteContacts {
             // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
             // not computed yet (zero before its first step) leaves it unknown.
             let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
-            let params = if m_t > 0.0 { this.params(ha, hb)?.with_tangential_mass(m_t)? } else { this.params(ha, hb)? };
-            let model = ContactModel::new(params, this.settings).with_geometry_reuse(this.geometry_reuse)?;
+            let params = if m_t > 0.0 {
+                this.params(ha, hb)?.with_tangential_mass(m_t)?
+            } else {
+                this.params(ha, hb)?
+            };
+            let model = ContactModel::new(params, this.settings)
+                .with_geometry_reuse(this.geometry_reuse)?;
             let out = model.evaluate(
                 &BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
                 &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
                 &mut state,
             )?;
-            Ok((out.zip(state).map(|(out, state)| Evaluated { pair: (ca, cb), bodies: (ba, bb), out, state }), None))
+            Ok((
+                out.zip(state).map(|(out, state)| Evaluated {
+                    pair: (ca, cb),
+                    bodies: (ba, bb),
+                    out,
+                    state,
+                }),
+                None,
+            ))
         };
         #[cfg(feature = "parallel")]
         let evaluated: Vec<Result<Checked>> = {
@@ -585,7 +652,8 @@ impl DiscreteContacts {
     /// 1 m pairs each body with dozens (14 000 pairs for the 180 bodies of `drop_in`, against
     /// ~1 500 whose spheres meet).
     fn candidate_pairs(&self, world: &PhysicsWorld) -> Result<Vec<Candidate>> {
-        let mut pairs: Vec<Candidate> = self.rapier_half_space_pairs(world).map(|(a, b)| (a, b, Vector::ZERO)).collect();
+        let mut pairs: Vec<Candidate> =
+            self.rapier_half_space_pairs(world).map(|(a, b)| (a, b, Vector::ZERO)).collect();
         let margin = self.margin();
         pairs.extend(self.sphere_pairs(world, |_, _| margin)?);
         Ok(pairs)
@@ -597,20 +665,28 @@ impl DiscreteContacts {
     /// admitting each other.
     fn interact(world: &PhysicsWorld, a: ColliderHandle, b: ColliderHandle) -> bool {
         let (ca, cb) = (&world.colliders[a], &world.colliders[b]);
-        let body_type = |co: &Collider| co.parent().and_then(|h| world.bodies.get(h)).map_or(RigidBodyType::Fixed, |rb| rb.body_type());
+        let body_type = |co: &Collider| {
+            co.parent()
+                .and_then(|h| world.bodies.get(h))
+                .map_or(RigidBodyType::Fixed, |rb| rb.body_type())
+        };
         let (ta, tb) = (body_type(ca), body_type(cb));
         (ca.parent().is_none() || ca.parent() != cb.parent())
             && ca.is_enabled()
             && cb.is_enabled()
             && !ca.is_sensor()
             && !cb.is_sensor()
-            && (ca.active_collision_types().test(ta, tb) || cb.active_collision_types().test(ta, tb))
+            && (ca.active_collision_types().test(ta, tb)
+                || cb.active_collision_types().test(ta, tb))
             && ca.collision_groups().test(cb.collision_groups())
             && ca.solver_groups().test(cb.solver_groups())
     }
 
     /// Rapier's broad-phase pairs of two handled colliders.
-    fn rapier_pairs<'w>(&'w self, world: &'w PhysicsWorld) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
+    fn rapier_pairs<'w>(
+        &'w self,
+        world: &'w PhysicsWorld,
+    ) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
         world
             .narrow_phase
             .contact_pairs()
@@ -620,9 +696,13 @@ impl DiscreteContacts {
 
     /// Rapier's pairs of two handled colliders of which one is unbounded (a half-space): the
     /// bounded pairs come from the neighbour list.
-    fn rapier_half_space_pairs<'w>(&'w self, world: &'w PhysicsWorld) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
+    fn rapier_half_space_pairs<'w>(
+        &'w self,
+        world: &'w PhysicsWorld,
+    ) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
         let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
-        self.rapier_pairs(world).filter(move |&(a, b)| (unbounded(&a) || unbounded(&b)) && Self::interact(world, a, b))
+        self.rapier_pairs(world)
+            .filter(move |&(a, b)| (unbounded(&a) || unbounded(&b)) && Self::interact(world, a, b))
     }
 
     /// Half the contact enlargement of a pair: each bounding sphere grows by it.
@@ -633,17 +713,27 @@ impl DiscreteContacts {
     /// Pairs of handled bounded colliders, at least one on a dynamic body, whose bounding
     /// spheres grown by `reach(collider, kinematics)` each meet (through the periodic faces
     /// when a box is set); in handle order. Answered from the Verlet list (see `neighbours`).
-    fn sphere_pairs(&self, world: &PhysicsWorld, reach: impl Fn(&Handled, &BodyKinematics) -> Real) -> Result<Vec<Candidate>> {
+    fn sphere_pairs(
+        &self,
+        world: &PhysicsWorld,
+        reach: impl Fn(&Handled, &BodyKinematics) -> Real,
+    ) -> Result<Vec<Candidate>> {
         let mut guard = self.neighbours.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         let n = &mut *guard;
         if n.generation != Some(self.generation) {
-            n.bounded = self.handled.iter().filter(|(_, h)| h.radius.is_finite()).map(|(&c, _)| c).collect();
+            n.bounded = self
+                .handled
+                .iter()
+                .filter(|(_, h)| h.radius.is_finite())
+                .map(|(&c, _)| c)
+                .collect();
             n.bounded.sort_by_key(|c| c.into_raw_parts());
             n.list = NeighbourList::default();
             n.generation = Some(self.generation);
         }
         let count = n.bounded.len();
-        let (mut spheres, mut reaches, mut mobile) = (Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count));
+        let (mut spheres, mut reaches, mut mobile) =
+            (Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count));
         for c in &n.bounded {
             let h = &self.handled[c];
             let (pose, k, _, mass) = Self::kinematics(world, *c);
@@ -654,7 +744,9 @@ impl DiscreteContacts {
         let found = n.list.query(&spheres, &reaches, self.periodic.as_ref())?;
         Ok(found
             .into_iter()
-            .filter(|&(i, j, _)| (mobile[i] || mobile[j]) && Self::interact(world, n.bounded[i], n.bounded[j]))
+            .filter(|&(i, j, _)| {
+                (mobile[i] || mobile[j]) && Self::interact(world, n.bounded[i], n.bounded[j])
+            })
             .map(|(i, j, shift)| (n.bounded[i], n.bounded[j], shift))
             .collect())
     }
@@ -667,18 +759,30 @@ impl DiscreteContacts {
     /// Handled pairs that may touch during the next `dt`: the candidates, plus pairs whose
     /// bounding spheres (or sphere and half-space) can meet at their current speeds — rapier
     /// only knows a pair after a step has run its broad phase, too late for a fast stiff impact.
-    fn lookahead_pairs(&self, world: &PhysicsWorld, dt: Real) -> Result<Vec<(ColliderHandle, ColliderHandle)>> {
-        let speed = |h: &Handled, k: &BodyKinematics| k.linvel.length() + if h.radius.is_finite() { k.angvel.length() * h.radius } else { 0.0 };
+    fn lookahead_pairs(
+        &self,
+        world: &PhysicsWorld,
+        dt: Real,
+    ) -> Result<Vec<(ColliderHandle, ColliderHandle)>> {
+        let speed = |h: &Handled, k: &BodyKinematics| {
+            k.linvel.length()
+                + if h.radius.is_finite() { k.angvel.length() * h.radius } else { 0.0 }
+        };
         let margin = self.margin();
         // Spheres grown by the margin and the distance they travel: the periodic candidates
         // and more.
         let reached = self.sphere_pairs(world, |h, k| margin + speed(h, k) * dt)?;
         // Rapier's pairs with a half-space, then the list's.
-        let mut pairs: Vec<(ColliderHandle, ColliderHandle)> = self.rapier_half_space_pairs(world).collect();
-        let known: std::collections::HashSet<(ColliderHandle, ColliderHandle), foldhash::fast::FixedState> = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
+        let mut pairs: Vec<(ColliderHandle, ColliderHandle)> =
+            self.rapier_half_space_pairs(world).collect();
+        let known: std::collections::HashSet<
+            (ColliderHandle, ColliderHandle),
+            foldhash::fast::FixedState,
+        > = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
         pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)));
         // Half-spaces against bounded bodies: few half-spaces, so a plain loop.
-        let mut planes: Vec<ColliderHandle> = self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
+        let mut planes: Vec<ColliderHandle> =
+            self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
         planes.sort_by_key(|c| c.into_raw_parts());
         for &p in &planes {
             let (pose, kp, _, _) = Self::kinematics(world, p);
@@ -687,7 +791,10 @@ impl DiscreteContacts {
             for (&c, h) in self.handled.iter().filter(|(_, h)| h.radius.is_finite()) {
                 let (pose_c, kc, _, _) = Self::kinematics(world, c);
                 let gap = n.dot(pose_c.transform_point(h.centre) - on_plane) - h.radius;
-                if gap <= (speed(h, &kc) + speed(&self.handled[&p], &kp)) * dt && !known.contains(&(p, c)) && Self::interact(world, p, c) {
+                if gap <= (speed(h, &kc) + speed(&self.handled[&p], &kp)) * dt
+                    && !known.contains(&(p, c))
+                    && Self::interact(world, p, c)
+                {
                     pairs.push((p, c));
                 }
             }
@@ -718,7 +825,9 @@ impl DiscreteContacts {
         // (largest sub-step, the contact time that sets it, the pair)
         let mut worst: Option<(Real, Real, String)> = None;
         let spring = self.tangential == TangentialLaw::Spring && !self.friction.is_none();
-        let per_half_period = (MIN_SUBSTEPS_PER_CONTACT * self.substeps_per_contact / SUBSTEPS_PER_CONTACT).max(STABLE_SUBSTEPS_PER_HALF_PERIOD);
+        let per_half_period = (MIN_SUBSTEPS_PER_CONTACT * self.substeps_per_contact
+            / SUBSTEPS_PER_CONTACT)
+            .max(STABLE_SUBSTEPS_PER_HALF_PERIOD);
         for (ca, cb) in self.lookahead_pairs(world, dt)? {
             let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
             let (pa, ka, _, ma) = Self::kinematics(world, ca);
@@ -731,7 +840,13 @@ impl DiscreteContacts {
             let r_star = 1.0 / (1.0 / ha.radius + 1.0 / hb.radius);
             let e_star = effective_modulus(&ha.material, &hb.material);
             // Relative speed bound: centre speeds plus rim speeds of the bounded bodies.
-            let rim = |k: &BodyKinematics, r: Real| if r.is_finite() { k.angvel.length() * r } else { 0.0 };
+            let rim = |k: &BodyKinematics, r: Real| {
+                if r.is_finite() {
+                    k.angvel.length() * r
+                } else {
+                    0.0
+                }
+            };
             let rims = rim(&ka, ha.radius) + rim(&kb, hb.radius);
             let v0 = ((ka.linvel - kb.linvel).length() + rims).max(1e-3);
             let t_h = hertz_contact_time(m_star, r_star, e_star, v0);
@@ -751,10 +866,16 @@ impl DiscreteContacts {
             } else {
                 ((ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rims).max(1e-3)
             };
-            let depth = (15.0 * m_star * v_normal * v_normal / (16.0 * e_star * r_star.sqrt())).powf(0.4);
+            let depth =
+                (15.0 * m_star * v_normal * v_normal / (16.0 * e_star * r_star.sqrt())).powf(0.4);
             let limit = self.indentation_limit * ha.half_size.min(hb.half_size);
             if depth > limit {
-                return Err(Error::ContactTooSoft { pair: format!("colliders {ca:?} and {cb:?}"), speed: v_normal, indentation: depth, limit });
+                return Err(Error::ContactTooSoft {
+                    pair: format!("colliders {ca:?} and {cb:?}"),
+                    speed: v_normal,
+                    indentation: depth,
+                    limit,
+                });
             }
             let mut limit = (t_h / self.substeps_per_contact, t_h);
             let mut resolve = |t: Real| {
@@ -763,13 +884,19 @@ impl DiscreteContacts {
                 }
             };
             // The spring's stiffness ratio and tangential mass.
-            let tangential = spring.then(|| (stiffness_ratio(&ha.material, &hb.material), Self::tangential_mass(world, (ca, ha), (cb, hb))));
+            let tangential = spring.then(|| {
+                (
+                    stiffness_ratio(&ha.material, &hb.material),
+                    Self::tangential_mass(world, (ca, ha), (cb, hb)),
+                )
+            });
             if let Some((kappa, m_t)) = tangential {
                 resolve(t_h * (m_t / (kappa * m_star)).sqrt());
             }
             // A live contact may be far stiffer than Hertz's sphere of the bounding radii (a face
             // on a face): its own stiffness's half-periods, normal and tangential, count too.
-            if let Some(k_n) = self.contact(ca, cb).map(|s| s.normal_stiffness).filter(|k| *k > 0.0) {
+            if let Some(k_n) = self.contact(ca, cb).map(|s| s.normal_stiffness).filter(|k| *k > 0.0)
+            {
                 resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
                 if let Some((kappa, m_t)) = tangential {
                     resolve(core::f64::consts::PI * (m_t / (kappa * k_n)).sqrt());
@@ -791,7 +918,13 @@ impl DiscreteContacts {
             StepPolicy::AutoSubstep { max_substeps } => (max_substeps.max(1), needed),
         };
         if needed > allowed {
-            return Err(Error::TimeStepTooLarge { dt, recommended, contact_time, substeps_needed: needed, pair });
+            return Err(Error::TimeStepTooLarge {
+                dt,
+                recommended,
+                contact_time,
+                substeps_needed: needed,
+                pair,
+            });
         }
         Ok(chosen.max(needed))
     }
@@ -809,20 +942,40 @@ mod tests {
     fn the_motion_bound_holds_every_point_of_the_body() {
         let shape = ConvexShape::cuboid(Vector::new(0.03, 0.01, 0.02)).unwrap();
         let (centre, radius) = shape.bounding_sphere();
-        let h = Handled { shape, material: Material::new(1e7, 0.3).unwrap(), centre, radius, half_size: 0.01 };
-        let from = Pose::from_parts(Vector::new(0.1, -0.2, 0.3), Rotation::from_axis_angle(Vector::new(1.0, 2.0, 2.0).normalize(), 0.7));
+        let h = Handled {
+            shape,
+            material: Material::new(1e7, 0.3).unwrap(),
+            centre,
+            radius,
+            half_size: 0.01,
+        };
+        let from = Pose::from_parts(
+            Vector::new(0.1, -0.2, 0.3),
+            Rotation::from_axis_angle(Vector::new(1.0, 2.0, 2.0).normalize(), 0.7),
+        );
         assert_eq!(moved(&h, &from, &from), 0.0);
         let mut tightest: Real = 0.0;
         for (k, angle) in [1e-9, 1e-4, 0.3, 3.0, 6.2].into_iter().enumerate() {
             let axis = Vector::new(1.0, -(k as Real), 0.5).normalize();
-            let to = Pose::from_parts(from.translation + Vector::new(1e-3, 0.0, -2e-3) * k as Real, Rotation::from_axis_angle(axis, angle) * from.rotation);
-            let (to_neg, bound) = (Pose::from_parts(to.translation, -to.rotation), moved(&h, &from, &to));
+            let to = Pose::from_parts(
+                from.translation + Vector::new(1e-3, 0.0, -2e-3) * k as Real,
+                Rotation::from_axis_angle(axis, angle) * from.rotation,
+            );
+            let (to_neg, bound) =
+                (Pose::from_parts(to.translation, -to.rotation), moved(&h, &from, &to));
             assert_eq!(moved(&h, &from, &to_neg), bound, "the quaternion's sign must not matter");
             // The corners of the box are its farthest points.
             for c in 0..8 {
-                let x = Vector::new(if c & 1 == 0 { -0.03 } else { 0.03 }, if c & 2 == 0 { -0.01 } else { 0.01 }, if c & 4 == 0 { -0.02 } else { 0.02 });
+                let x = Vector::new(
+                    if c & 1 == 0 { -0.03 } else { 0.03 },
+                    if c & 2 == 0 { -0.01 } else { 0.01 },
+                    if c & 4 == 0 { -0.02 } else { 0.02 },
+                );
                 let moved_by = (to.transform_point(x) - from.transform_point(x)).length();
-                assert!(moved_by <= bound * (1.0 + 1e-12), "angle {angle}: corner moved {moved_by:e} > bound {bound:e}");
+                assert!(
+                    moved_by <= bound * (1.0 + 1e-12),
+                    "angle {angle}: corner moved {moved_by:e} > bound {bound:e}"
+                );
                 tightest = tightest.max(moved_by / bound);
             }
         }

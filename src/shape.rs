@@ -29,7 +29,11 @@ pub trait Sdf: Send + Sync {
     fn gradient(&self, p: Vector) -> Vector {
         let b = self.local_bounds();
         let size = (b.maxs - b.mins).min_element();
-        let h = if size.is_finite() && size > 0.0 { 1e-7 * size } else { 1e-7 * (1.0 + p.abs().max_element()) };
+        let h = if size.is_finite() && size > 0.0 {
+            1e-7 * size
+        } else {
+            1e-7 * (1.0 + p.abs().max_element())
+        };
         let g = Vector::new(
             self.distance(p + Vector::X * h) - self.distance(p - Vector::X * h),
             self.distance(p + Vector::Y * h) - self.distance(p - Vector::Y * h),
@@ -199,10 +203,12 @@ impl PolyhedronSdf {
         for p in points {
             check_finite_vec("polyhedron vertex", *p)?;
         }
-        let hull = parry3d_f64::shape::ConvexPolyhedron::from_convex_hull(points).ok_or(Error::UnsupportedShape {
-            shape: "ConvexPolyhedron".into(),
-            why: "the points do not span a volume (need at least 4 non-coplanar points)",
-        })?;
+        let hull = parry3d_f64::shape::ConvexPolyhedron::from_convex_hull(points).ok_or(
+            Error::UnsupportedShape {
+                shape: "ConvexPolyhedron".into(),
+                why: "the points do not span a volume (need at least 4 non-coplanar points)",
+            },
+        )?;
         let sdf = Self::from_parry(&hull);
         // Divergence theorem: V = Σ offset·area / 3 over the faces.
         let volume: Real = sdf
@@ -210,7 +216,10 @@ impl PolyhedronSdf {
             .iter()
             .zip(&sdf.faces)
             .map(|((n, off), v)| {
-                let area = (1..v.len() - 1).map(|i| (v[i] - v[0]).cross(v[i + 1] - v[0]).dot(*n)).sum::<Real>() * 0.5;
+                let area = (1..v.len() - 1)
+                    .map(|i| (v[i] - v[0]).cross(v[i + 1] - v[0]).dot(*n))
+                    .sum::<Real>()
+                    * 0.5;
                 off * area / 3.0
             })
             .sum();
@@ -232,8 +241,10 @@ impl PolyhedronSdf {
         let mut faces = Vec::with_capacity(poly.faces().len());
         for f in poly.faces() {
             let first = f.first_vertex_or_edge as usize;
-            let mut verts: Vec<Vector> =
-                adj[first..first + f.num_vertices_or_edges as usize].iter().map(|&i| pts[i as usize]).collect();
+            let mut verts: Vec<Vector> = adj[first..first + f.num_vertices_or_edges as usize]
+                .iter()
+                .map(|&i| pts[i as usize])
+                .collect();
             let n = f.normal;
             let centre = verts.iter().copied().sum::<Vector>() / verts.len() as Real;
             // Order the vertices counter-clockwise about the outward normal.
@@ -271,10 +282,12 @@ impl PolyhedronSdf {
                 })
             })
             .collect();
-        let edge_start = std::iter::once(0).chain(faces.iter().scan(0, |end, f| {
-            *end += f.len();
-            Some(*end)
-        })).collect();
+        let edge_start = std::iter::once(0)
+            .chain(faces.iter().scan(0, |end, f| {
+                *end += f.len();
+                Some(*end)
+            }))
+            .collect();
         Self { planes, faces, edges, edge_start, bounds }
     }
 
@@ -318,7 +331,14 @@ impl PolyhedronSdf {
                 if d < out.0 {
                     // Within round-off of an edge, `p − q` has no direction: the face's normal
                     // is then as good a (sub)gradient there.
-                    out = (d, if d > 1e-9 * (self.bounds.maxs - self.bounds.mins).max_element() { (p - q) / d } else { *n });
+                    out = (
+                        d,
+                        if d > 1e-9 * (self.bounds.maxs - self.bounds.mins).max_element() {
+                            (p - q) / d
+                        } else {
+                            *n
+                        },
+                    );
                 }
             }
             if inside {
@@ -439,7 +459,9 @@ impl ConvexShape {
         let axis = b - a;
         let l2 = axis.length_squared();
         // The exit from one piece's ball or cylinder, if it falls within the piece [lo, hi].
-        let exit = |w: Vector, v: Vector, lo: Real, hi: Real| exit_root(w, v, r).filter(|t| (lo..=hi).contains(t));
+        let exit = |w: Vector, v: Vector, lo: Real, hi: Real| {
+            exit_root(w, v, r).filter(|t| (lo..=hi).contains(t))
+        };
         if l2 <= 0.0 {
             return exit(p - a, d, 0.0, Real::INFINITY);
         }
@@ -458,7 +480,13 @@ impl ConvexShape {
         } else if s1 < 0.0 {
             [(Real::NEG_INFINITY, t1, 2), (t1, t0, 1), (t0, Real::INFINITY, 0)]
         } else {
-            let which = if s0 < 0.0 { 0 } else if s0 > 1.0 { 2 } else { 1 };
+            let which = if s0 < 0.0 {
+                0
+            } else if s0 > 1.0 {
+                2
+            } else {
+                1
+            };
             [(Real::NEG_INFINITY, Real::INFINITY, which); 3]
         };
         pieces.iter().find_map(|&(lo, hi, k)| {
@@ -489,15 +517,24 @@ impl ConvexShape {
         };
         let t = match self {
             Self::Ball { radius } => return exit_root(p, d, radius + offset),
-            Self::Capsule { a, b, radius } => return Self::capsule_exit(p, d, *a, *b, radius + offset),
-            Self::Cuboid { half_extents } => (0..3).map(|j| slab(Vector::AXES[j], half_extents[j]).min(slab(-Vector::AXES[j], half_extents[j]))).fold(Real::INFINITY, Real::min),
+            Self::Capsule { a, b, radius } => {
+                return Self::capsule_exit(p, d, *a, *b, radius + offset)
+            }
+            Self::Cuboid { half_extents } => (0..3)
+                .map(|j| {
+                    slab(Vector::AXES[j], half_extents[j])
+                        .min(slab(-Vector::AXES[j], half_extents[j]))
+                })
+                .fold(Real::INFINITY, Real::min),
             Self::Cylinder { half_height, radius } => {
                 let caps = slab(Vector::Y, *half_height).min(slab(-Vector::Y, *half_height));
                 // Round side: the exit from the disc of `radius` in the xz plane.
                 let xz = |v: Vector| Vector::new(v.x, 0.0, v.z);
                 caps.min(exit_root(xz(p), xz(d), *radius).unwrap_or(Real::INFINITY))
             }
-            Self::Polyhedron(poly) => poly.planes.iter().map(|&(n, h)| slab(n, h)).fold(Real::INFINITY, Real::min),
+            Self::Polyhedron(poly) => {
+                poly.planes.iter().map(|&(n, h)| slab(n, h)).fold(Real::INFINITY, Real::min)
+            }
             _ => return None,
         };
         t.is_finite().then_some(t)
@@ -510,7 +547,11 @@ impl ConvexShape {
 
     /// A box with the given half extents.
     pub fn cuboid(half_extents: Vector) -> Result<Self> {
-        for (name, v) in [("half_extents.x", half_extents.x), ("half_extents.y", half_extents.y), ("half_extents.z", half_extents.z)] {
+        for (name, v) in [
+            ("half_extents.x", half_extents.x),
+            ("half_extents.y", half_extents.y),
+            ("half_extents.z", half_extents.z),
+        ] {
             check_positive(name, v)?;
         }
         Ok(Self::Cuboid { half_extents })
@@ -518,12 +559,18 @@ impl ConvexShape {
 
     /// A cylinder along `y`.
     pub fn cylinder(half_height: Real, radius: Real) -> Result<Self> {
-        Ok(Self::Cylinder { half_height: check_positive("half_height", half_height)?, radius: check_positive("radius", radius)? })
+        Ok(Self::Cylinder {
+            half_height: check_positive("half_height", half_height)?,
+            radius: check_positive("radius", radius)?,
+        })
     }
 
     /// A cone along `y`.
     pub fn cone(half_height: Real, radius: Real) -> Result<Self> {
-        Ok(Self::Cone { half_height: check_positive("half_height", half_height)?, radius: check_positive("radius", radius)? })
+        Ok(Self::Cone {
+            half_height: check_positive("half_height", half_height)?,
+            radius: check_positive("radius", radius)?,
+        })
     }
 
     /// A capsule around the segment `a`–`b`.
@@ -540,7 +587,10 @@ impl ConvexShape {
 
     /// `inner` dilated by `border_radius`.
     pub fn rounded(inner: ConvexShape, border_radius: Real) -> Result<Self> {
-        Ok(Self::Rounded { inner: Box::new(inner), border_radius: check_positive("border_radius", border_radius)? })
+        Ok(Self::Rounded {
+            inner: Box::new(inner),
+            border_radius: check_positive("border_radius", border_radius)?,
+        })
     }
 
     /// The half-space `{p : normal·p <= 0}`; `normal` is normalised.
@@ -555,7 +605,10 @@ impl ConvexShape {
     }
 
     /// A user SDF `f` (body frame, negative inside, exact) with the body's bounding box.
-    pub fn custom(f: impl Fn(Vector) -> Real + Send + Sync + 'static, bounds: Aabb) -> Result<Self> {
+    pub fn custom(
+        f: impl Fn(Vector) -> Real + Send + Sync + 'static,
+        bounds: Aabb,
+    ) -> Result<Self> {
         check_finite_vec("custom SDF bounds (mins)", bounds.mins)?;
         check_finite_vec("custom SDF bounds (maxs)", bounds.maxs)?;
         let w = bounds.maxs - bounds.mins;
@@ -566,9 +619,11 @@ impl ConvexShape {
     /// Converts a parry shape. Supported: Ball, Cuboid, Cylinder, Cone, Capsule,
     /// ConvexPolyhedron, their `Round*` variants and HalfSpace.
     pub fn from_parry(shape: &dyn Shape) -> Result<Self> {
-        let unsupported = |name: &str| Error::UnsupportedShape {
+        let unsupported = |name: &str| {
+            Error::UnsupportedShape {
             shape: name.to_string(),
             why: "not a convex solid; decompose it into convex pieces (ConvexPolyhedron) or give a custom SDF",
+        }
         };
         Ok(match shape.as_typed_shape() {
             TypedShape::Ball(b) => Self::ball(b.radius)?,
@@ -576,16 +631,25 @@ impl ConvexShape {
             TypedShape::Cylinder(c) => Self::cylinder(c.half_height, c.radius)?,
             TypedShape::Cone(c) => Self::cone(c.half_height, c.radius)?,
             TypedShape::Capsule(c) => Self::capsule(c.segment.a, c.segment.b, c.radius)?,
-            TypedShape::ConvexPolyhedron(p) => Self::Polyhedron(Arc::new(PolyhedronSdf::from_parry(p))),
+            TypedShape::ConvexPolyhedron(p) => {
+                Self::Polyhedron(Arc::new(PolyhedronSdf::from_parry(p)))
+            }
             TypedShape::HalfSpace(h) => Self::half_space(h.normal)?,
-            TypedShape::RoundCuboid(r) => Self::rounded(Self::cuboid(r.inner_shape.half_extents)?, r.border_radius)?,
-            TypedShape::RoundCylinder(r) => {
-                Self::rounded(Self::cylinder(r.inner_shape.half_height, r.inner_shape.radius)?, r.border_radius)?
+            TypedShape::RoundCuboid(r) => {
+                Self::rounded(Self::cuboid(r.inner_shape.half_extents)?, r.border_radius)?
             }
-            TypedShape::RoundCone(r) => Self::rounded(Self::cone(r.inner_shape.half_height, r.inner_shape.radius)?, r.border_radius)?,
-            TypedShape::RoundConvexPolyhedron(r) => {
-                Self::rounded(Self::Polyhedron(Arc::new(PolyhedronSdf::from_parry(&r.inner_shape))), r.border_radius)?
-            }
+            TypedShape::RoundCylinder(r) => Self::rounded(
+                Self::cylinder(r.inner_shape.half_height, r.inner_shape.radius)?,
+                r.border_radius,
+            )?,
+            TypedShape::RoundCone(r) => Self::rounded(
+                Self::cone(r.inner_shape.half_height, r.inner_shape.radius)?,
+                r.border_radius,
+            )?,
+            TypedShape::RoundConvexPolyhedron(r) => Self::rounded(
+                Self::Polyhedron(Arc::new(PolyhedronSdf::from_parry(&r.inner_shape))),
+                r.border_radius,
+            )?,
             other => return Err(unsupported(&format!("{:?}", shape_type_name(&other)))),
         })
     }
@@ -610,7 +674,13 @@ impl ConvexShape {
                     (out, (qo * p.signum()) / out)
                 } else {
                     let m = q.max_element();
-                    let axis = if q.x == m { Vector::X } else if q.y == m { Vector::Y } else { Vector::Z };
+                    let axis = if q.x == m {
+                        Vector::X
+                    } else if q.y == m {
+                        Vector::Y
+                    } else {
+                        Vector::Z
+                    };
                     (m, axis * p.signum())
                 }
             }
@@ -716,7 +786,9 @@ impl Sdf for ConvexShape {
         let t = match self {
             Self::HalfSpace { normal } => (offset - normal.dot(p)) / normal.dot(e),
             Self::Ball { .. } | Self::Capsule { .. } => self.exit_along(p, e, offset)?,
-            Self::Cuboid { .. } | Self::Cylinder { .. } | Self::Polyhedron(_) if offset == 0.0 => self.exit_along(p, e, offset)?,
+            Self::Cuboid { .. } | Self::Cylinder { .. } | Self::Polyhedron(_) if offset == 0.0 => {
+                self.exit_along(p, e, offset)?
+            }
             _ => return None,
         };
         t.is_finite().then(|| t.clamp(0.0, 1.0))
@@ -733,11 +805,16 @@ impl Sdf for ConvexShape {
         match self {
             Self::Ball { radius } => (Vector::ZERO, *radius),
             // Rims at y = ±h (a cone's apex lies inside the same sphere).
-            Self::Cylinder { half_height, radius } | Self::Cone { half_height, radius } => (Vector::ZERO, radius.hypot(*half_height)),
+            Self::Cylinder { half_height, radius } | Self::Cone { half_height, radius } => {
+                (Vector::ZERO, radius.hypot(*half_height))
+            }
             Self::Capsule { a, b, radius } => ((*a + *b) * 0.5, 0.5 * (*b - *a).length() + radius),
             Self::Polyhedron(p) => {
                 let centre = (p.bounds.mins + p.bounds.maxs) * 0.5;
-                (centre, p.faces.iter().flatten().map(|v| (*v - centre).length()).fold(0.0, Real::max))
+                (
+                    centre,
+                    p.faces.iter().flatten().map(|v| (*v - centre).length()).fold(0.0, Real::max),
+                )
             }
             Self::Rounded { inner, border_radius } => {
                 let (centre, r) = inner.bounding_sphere();
@@ -760,7 +837,13 @@ impl Sdf for ConvexShape {
 
     fn face_planes(&self) -> Option<Vec<(Vector, Real)>> {
         match self {
-            Self::Cuboid { half_extents } => Some((0..6).map(|k| (Vector::AXES[k % 3] * if k < 3 { 1.0 } else { -1.0 }, half_extents[k % 3])).collect()),
+            Self::Cuboid { half_extents } => Some(
+                (0..6)
+                    .map(|k| {
+                        (Vector::AXES[k % 3] * if k < 3 { 1.0 } else { -1.0 }, half_extents[k % 3])
+                    })
+                    .collect(),
+            ),
             Self::Polyhedron(p) => Some(p.planes.clone()),
             Self::HalfSpace { normal } => Some(vec![(*normal, 0.0)]),
             _ => None,
@@ -775,11 +858,16 @@ impl Sdf for ConvexShape {
                 let h = Vector::new(*radius, *half_height, *radius);
                 Aabb::new(-h, h)
             }
-            Self::Capsule { a, b, radius } => Aabb::new(a.min(*b) - Vector::splat(*radius), a.max(*b) + Vector::splat(*radius)),
+            Self::Capsule { a, b, radius } => {
+                Aabb::new(a.min(*b) - Vector::splat(*radius), a.max(*b) + Vector::splat(*radius))
+            }
             Self::Polyhedron(p) => p.bounds,
             Self::Rounded { inner, border_radius } => {
                 let b = inner.local_bounds();
-                Aabb::new(b.mins - Vector::splat(*border_radius), b.maxs + Vector::splat(*border_radius))
+                Aabb::new(
+                    b.mins - Vector::splat(*border_radius),
+                    b.maxs + Vector::splat(*border_radius),
+                )
             }
             Self::HalfSpace { normal } => {
                 // Bounded only along an axis-aligned normal.

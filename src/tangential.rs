@@ -50,7 +50,8 @@ pub fn stiffness_ratio(a: &Material, b: &Material) -> Real {
         (2.0 - nu) * 2.0 * (1.0 + nu) / m.youngs_modulus()
     };
     let normal_compliance = |m: &Material| (1.0 - m.poisson_ratio().powi(2)) / m.youngs_modulus();
-    4.0 * (normal_compliance(a) + normal_compliance(b)) / (shear_compliance(a) + shear_compliance(b))
+    4.0 * (normal_compliance(a) + normal_compliance(b))
+        / (shear_compliance(a) + shear_compliance(b))
 }
 
 /// What a live contact's tangential spring remembers between evaluations.
@@ -74,16 +75,30 @@ impl TangentialHistory {
         let tangential = |v: Vector| v - normal * v.dot(normal);
         let last = tangential(self.displacement);
         let length = self.displacement.length();
-        let rotated = if length > 0.0 && last.length() > 0.0 { last * (length / last.length()) } else { last };
+        let rotated = if length > 0.0 && last.length() > 0.0 {
+            last * (length / last.length())
+        } else {
+            last
+        };
         rotated + tangential(pose_a.transform_point(a) - pose_b.transform_point(b))
     }
 
     /// Records an evaluation: the new displacement, whether it slid, and the contact point as
     /// material points of both bodies.
-    pub fn record(&mut self, displacement: Vector, sliding: bool, contact_point: Vector, pose_a: &Pose, pose_b: &Pose) {
+    pub fn record(
+        &mut self,
+        displacement: Vector,
+        sliding: bool,
+        contact_point: Vector,
+        pose_a: &Pose,
+        pose_b: &Pose,
+    ) {
         self.displacement = displacement;
         self.sliding = sliding;
-        self.anchors = Some([pose_a.inverse_transform_point(contact_point), pose_b.inverse_transform_point(contact_point)]);
+        self.anchors = Some([
+            pose_a.inverse_transform_point(contact_point),
+            pose_b.inverse_transform_point(contact_point),
+        ]);
     }
 }
 
@@ -121,16 +136,34 @@ pub struct SpringForce {
 /// The tangential force for a carried displacement `xi` (in the tangent plane), tangential
 /// slip velocity `v_t` of A relative to B, stiffness `k_t`, viscous coefficient `eta_t` and
 /// normal force `f_n`; `was_sliding` from the contact's history.
-pub fn spring_force(friction: &Friction, k_t: Real, eta_t: Real, f_n: Real, xi: Vector, v_t: Vector, was_sliding: bool) -> SpringForce {
+pub fn spring_force(
+    friction: &Friction,
+    k_t: Real,
+    eta_t: Real,
+    f_n: Real,
+    xi: Vector,
+    v_t: Vector,
+    was_sliding: bool,
+) -> SpringForce {
     if friction.is_none() || k_t <= 0.0 {
-        return SpringForce { force_on_a: Vector::ZERO, displacement: Vector::ZERO, sliding: false };
+        return SpringForce {
+            force_on_a: Vector::ZERO,
+            displacement: Vector::ZERO,
+            sliding: false,
+        };
     }
     let trial = -(xi * k_t) - v_t * eta_t;
     let magnitude = trial.length();
-    let limit = if was_sliding { friction.kinetic_coefficient } else { friction.static_coefficient } * f_n.max(0.0);
+    let limit =
+        if was_sliding { friction.kinetic_coefficient } else { friction.static_coefficient }
+            * f_n.max(0.0);
     if magnitude <= limit {
         return SpringForce { force_on_a: trial, displacement: xi, sliding: false };
     }
-    let force = if magnitude > 0.0 { trial * (friction.kinetic_coefficient * f_n.max(0.0) / magnitude) } else { Vector::ZERO };
+    let force = if magnitude > 0.0 {
+        trial * (friction.kinetic_coefficient * f_n.max(0.0) / magnitude)
+    } else {
+        Vector::ZERO
+    };
     SpringForce { force_on_a: force, displacement: -(force + v_t * eta_t) / k_t, sliding: true }
 }

@@ -15,7 +15,9 @@ use discrete_contact::parry3d_f64::bounding_volume::Aabb;
 use discrete_contact::rapier::DiscreteContacts;
 use discrete_contact::rapier3d_f64::prelude::*;
 use discrete_contact::validation::drop_in::{bin_scene, discrete_contacts, rubber};
-use discrete_contact::validation::hindered_settling::{HinderedSettling, ParticleShape, SettlingRun};
+use discrete_contact::validation::hindered_settling::{
+    HinderedSettling, ParticleShape, SettlingRun,
+};
 use discrete_contact::validation::wet_rebound::{ReboundRun, WetRebound};
 use discrete_contact::{ConvexShape, Error};
 
@@ -36,7 +38,10 @@ fn fingerprint(world: &PhysicsWorld) -> Vec<u64> {
         .flat_map(|(_, rb)| {
             let p = rb.position();
             let (t, q) = (p.translation, p.rotation);
-            [t.x, t.y, t.z, q.x, q.y, q.z, q.w].into_iter().chain(rb.linvel().to_array()).chain(rb.angvel().to_array())
+            [t.x, t.y, t.z, q.x, q.y, q.z, q.w]
+                .into_iter()
+                .chain(rb.linvel().to_array())
+                .chain(rb.angvel().to_array())
         })
         .map(f64::to_bits)
         .collect()
@@ -69,13 +74,17 @@ fn a_dry_run_resumed_from_a_checkpoint_is_bit_identical() {
     let before = fingerprint(&world);
     drop((world, contacts));
 
-    let (mut world, mut contacts): (PhysicsWorld, DiscreteContacts) = checkpoint::load(&path, "test/bin").unwrap();
+    let (mut world, mut contacts): (PhysicsWorld, DiscreteContacts) =
+        checkpoint::load(&path, "test/bin").unwrap();
     assert_eq!(fingerprint(&world), before, "the saved state itself");
     for _ in stop..total {
         contacts.step(&mut world).unwrap();
     }
     assert_eq!(contacts.contact_count(), uninterrupted.1);
-    assert!(fingerprint(&world) == uninterrupted.0, "resumed run differs from the uninterrupted one");
+    assert!(
+        fingerprint(&world) == uninterrupted.0,
+        "resumed run differs from the uninterrupted one"
+    );
 }
 
 fn small_settling() -> HinderedSettling {
@@ -112,7 +121,11 @@ fn a_wet_periodic_run_resumed_from_a_checkpoint_is_bit_identical() {
         resumed.step().unwrap();
     }
     assert!(fingerprint(resumed.world()) == world_bits, "bodies differ after resuming");
-    assert_eq!(resumed.fluid().mean_velocity().to_array().map(f64::to_bits), fluid_bits, "fluid differs");
+    assert_eq!(
+        resumed.fluid().mean_velocity().to_array().map(f64::to_bits),
+        fluid_bits,
+        "fluid differs"
+    );
     let resumed = resumed.finish();
     assert_eq!(resumed.samples, whole.samples, "⟨v⟩/v_s series");
     assert_eq!(resumed.v_mean_over_vs.to_bits(), whole.v_mean_over_vs.to_bits());
@@ -162,7 +175,10 @@ fn a_wet_run_in_a_closed_box_resumed_during_its_impact_is_bit_identical() {
         t.samples.iter().flat_map(|s| [s.0, s.1, s.2]).map(f64::to_bits).collect()
     };
     assert!(bits(&resumed) == bits(&whole), "gap and velocity series differ after resuming");
-    assert_eq!((resumed.impact, resumed.rebound_speed, resumed.rebound_height), (whole.impact, whole.rebound_speed, whole.rebound_height));
+    assert_eq!(
+        (resumed.impact, resumed.rebound_speed, resumed.rebound_height),
+        (whole.impact, whole.rebound_speed, whole.rebound_height)
+    );
 }
 
 /// A lattice storing f32 populations (raw bits in the file) saved mid-run and resumed goes on
@@ -183,7 +199,10 @@ fn an_f32_lattice_resumed_from_a_checkpoint_is_bit_identical() {
     let (a, b) = (lat.run(6).unwrap(), resumed.run(6).unwrap());
     assert_eq!(a.particle_forces[&0], b.particle_forces[&0]);
     for (x, y, z) in [(0, 0, 0), (5, 4, 3), (11, 9, 7)] {
-        assert_eq!(lat.populations(x, y, z).map(f64::to_bits), resumed.populations(x, y, z).map(f64::to_bits));
+        assert_eq!(
+            lat.populations(x, y, z).map(f64::to_bits),
+            resumed.populations(x, y, z).map(f64::to_bits)
+        );
     }
 }
 
@@ -209,22 +228,42 @@ fn damaged_foreign_and_mismatched_files_are_refused_with_the_reason() {
         checkpoint::load::<u64>(&p, "test/number")
     };
     let last = bytes.len() - 1;
-    assert_eq!(problem(variant("text", &|b| *b = b"t,x\n0,1\n".to_vec())), CheckpointProblem::NotACheckpoint);
+    assert_eq!(
+        problem(variant("text", &|b| *b = b"t,x\n0,1\n".to_vec())),
+        CheckpointProblem::NotACheckpoint
+    );
     assert_eq!(problem(variant("empty", &|b| b.clear())), CheckpointProblem::NotACheckpoint);
     assert_eq!(
-        problem(variant("format", &|b| b[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes()))),
+        problem(
+            variant("format", &|b| b[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes()))
+        ),
         CheckpointProblem::FormatVersion { found: FORMAT_VERSION + 1, supported: FORMAT_VERSION }
     );
     let writer_at = 14; // signature, format, writer length
-    assert!(matches!(problem(variant("writer", &|b| b[writer_at] ^= 0x20)), CheckpointProblem::WrittenBy { .. }));
-    assert!(matches!(problem(variant("cut", &|b| b.truncate(last))), CheckpointProblem::Length { .. }));
+    assert!(matches!(
+        problem(variant("writer", &|b| b[writer_at] ^= 0x20)),
+        CheckpointProblem::WrittenBy { .. }
+    ));
+    assert!(matches!(
+        problem(variant("cut", &|b| b.truncate(last))),
+        CheckpointProblem::Length { .. }
+    ));
     assert!(matches!(problem(variant("longer", &|b| b.push(0))), CheckpointProblem::Length { .. }));
-    assert!(matches!(problem(variant("altered", &|b| b[last] ^= 1)), CheckpointProblem::Checksum { .. }));
-    assert!(matches!(problem(checkpoint::load(&good, "test/other")), CheckpointProblem::Kind { .. }));
+    assert!(matches!(
+        problem(variant("altered", &|b| b[last] ^= 1)),
+        CheckpointProblem::Checksum { .. }
+    ));
+    assert!(matches!(
+        problem(checkpoint::load(&good, "test/other")),
+        CheckpointProblem::Kind { .. }
+    ));
     // Right kind, wrong type: a settling run is not a number.
     let wrong = dir.join("wrong.ckpt");
     checkpoint::save(&wrong, "test/number", &(1.5f64, "x")).unwrap();
-    assert!(matches!(problem(checkpoint::load(&wrong, "test/number")), CheckpointProblem::Decode(_)));
+    assert!(matches!(
+        problem(checkpoint::load(&wrong, "test/number")),
+        CheckpointProblem::Decode(_)
+    ));
     match SettlingRun::load(&good, &small_settling()) {
         Err(Error::Checkpoint { problem: CheckpointProblem::Kind { .. }, .. }) => {}
         other => panic!("{:?}", other.err()),
@@ -234,12 +273,21 @@ fn damaged_foreign_and_mismatched_files_are_refused_with_the_reason() {
     let bad = dir.join("bad_material.ckpt");
     checkpoint::save(&bad, "test/material", &(-1.0f64, 0.3f64)).unwrap();
     match checkpoint::load::<discrete_contact::Material>(&bad, "test/material") {
-        Err(Error::Checkpoint { problem: CheckpointProblem::Decode(why), .. }) => assert!(why.contains("youngs_modulus"), "{why}"),
+        Err(Error::Checkpoint { problem: CheckpointProblem::Decode(why), .. }) => {
+            assert!(why.contains("youngs_modulus"), "{why}")
+        }
         other => panic!("{other:?}"),
     }
-    checkpoint::save(&bad, "test/settings", &(0usize, discrete_contact::IntegrationMode::Subcell, [0.0f64; 2], false, false)).unwrap();
+    checkpoint::save(
+        &bad,
+        "test/settings",
+        &(0usize, discrete_contact::IntegrationMode::Subcell, [0.0f64; 2], false, false),
+    )
+    .unwrap();
     match checkpoint::load::<discrete_contact::OverlapSettings>(&bad, "test/settings") {
-        Err(Error::Checkpoint { problem: CheckpointProblem::Decode(why), .. }) => assert!(why.contains("n_c"), "{why}"),
+        Err(Error::Checkpoint { problem: CheckpointProblem::Decode(why), .. }) => {
+            assert!(why.contains("n_c"), "{why}")
+        }
         other => panic!("{other:?}"),
     }
     // A missing file is an i/o error naming the path.
@@ -248,10 +296,16 @@ fn damaged_foreign_and_mismatched_files_are_refused_with_the_reason() {
         other => panic!("{other:?}"),
     }
     // A closure cannot be saved: refused, and nothing is written.
-    let custom = ConvexShape::custom(|p: Vector| p.length() - 1.0, Aabb::new(Vector::splat(-1.0), Vector::splat(1.0))).unwrap();
+    let custom = ConvexShape::custom(
+        |p: Vector| p.length() - 1.0,
+        Aabb::new(Vector::splat(-1.0), Vector::splat(1.0)),
+    )
+    .unwrap();
     let path = dir.join("custom.ckpt");
     match checkpoint::save(&path, "test/shape", &custom) {
-        Err(Error::Checkpoint { problem: CheckpointProblem::Encode(why), .. }) => assert!(why.contains("Custom"), "{why}"),
+        Err(Error::Checkpoint { problem: CheckpointProblem::Encode(why), .. }) => {
+            assert!(why.contains("Custom"), "{why}")
+        }
         other => panic!("{other:?}"),
     }
     assert!(!path.exists());
@@ -289,7 +343,13 @@ fn a_run_killed_while_writing_leaves_no_truncated_file() {
     discrete_contact::io::write_atomically(&target, |w| w.write_all(complete.as_bytes())).unwrap();
 
     let mut child = Command::new(std::env::current_exe().unwrap())
-        .args(["child_writes_slowly_until_killed", "--exact", "--ignored", "--nocapture", "--test-threads=1"])
+        .args([
+            "child_writes_slowly_until_killed",
+            "--exact",
+            "--ignored",
+            "--nocapture",
+            "--test-threads=1",
+        ])
         .env(CHILD_TARGET, &target)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
@@ -303,7 +363,11 @@ fn a_run_killed_while_writing_leaves_no_truncated_file() {
     }
     // Mid-write: the new content is on its way, in a file of its own.
     let partial = || -> Vec<PathBuf> {
-        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.to_string_lossy().contains(".partial")).collect()
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.to_string_lossy().contains(".partial"))
+            .collect()
     };
     let pending = partial();
     assert_eq!(pending.len(), 1, "{pending:?}");
@@ -311,7 +375,11 @@ fn a_run_killed_while_writing_leaves_no_truncated_file() {
     child.kill().unwrap();
     child.wait().unwrap();
 
-    assert_eq!(std::fs::read_to_string(&target).unwrap(), complete, "the target holds the last complete file");
+    assert_eq!(
+        std::fs::read_to_string(&target).unwrap(),
+        complete,
+        "the target holds the last complete file"
+    );
     let name = pending[0].file_name().unwrap().to_string_lossy().into_owned();
     assert!(name.starts_with(".results.csv.") && name.ends_with(".partial.csv"), "{name}");
 

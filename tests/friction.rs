@@ -25,20 +25,28 @@ struct Slope {
     body: RigidBodyHandle,
 }
 
-fn slope(theta_deg: f64, collider: ColliderBuilder, height: f64, friction: Friction, law: TangentialLaw) -> Slope {
+fn slope(
+    theta_deg: f64,
+    collider: ColliderBuilder,
+    height: f64,
+    friction: Friction,
+    law: TangentialLaw,
+) -> Slope {
     let t = theta_deg.to_radians();
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::new(G * t.sin(), -G * t.cos(), 0.0);
     world.integration_parameters.dt = 1.0 / 240.0;
     let floor = world.insert_body(RigidBodyBuilder::fixed());
     world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(floor));
-    let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, height, 0.0)));
+    let body =
+        world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, height, 0.0)));
     world.insert_collider(collider.density(1000.0), Some(body));
-    let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
-        .unwrap()
-        .with_friction(friction)
-        .with_tangential_law(law)
-        .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+            .unwrap()
+            .with_friction(friction)
+            .with_tangential_law(law)
+            .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
     // Rubber-like.
     contacts.handle_all(&mut world, Material::new(1e7, 0.45).unwrap()).unwrap();
     Slope { world, contacts, body }
@@ -59,7 +67,13 @@ impl Slope {
 }
 
 fn box_on_slope(theta_deg: f64, law: TangentialLaw) -> Slope {
-    slope(theta_deg, ColliderBuilder::cuboid(0.05, 0.05, 0.05), 0.05, Friction::new(0.5, 0.4, 0.01).unwrap(), law)
+    slope(
+        theta_deg,
+        ColliderBuilder::cuboid(0.05, 0.05, 0.05),
+        0.05,
+        Friction::new(0.5, 0.4, 0.01).unwrap(),
+        law,
+    )
 }
 
 /// The least-squares acceleration `2 c` of `x ≈ a + b t + c t²` over the samples.
@@ -71,7 +85,8 @@ fn fitted_acceleration(samples: &[(f64, f64)]) -> f64 {
     let (s1, s2) = (|t: f64| t - t0, |t: f64| (t - t0) * (t - t0));
     let m2 = mean(&|t, _| s2(t));
     let q = |t: f64| s2(t) - m2;
-    let (sqq, sq1, s11) = (mean(&|t, _| q(t) * q(t)), mean(&|t, _| q(t) * s1(t)), mean(&|t, _| s1(t) * s1(t)));
+    let (sqq, sq1, s11) =
+        (mean(&|t, _| q(t) * q(t)), mean(&|t, _| q(t) * s1(t)), mean(&|t, _| s1(t) * s1(t)));
     let (xq, x1) = (mean(&|t, x| q(t) * x), mean(&|t, x| s1(t) * x));
     let c = (xq * s11 - x1 * sq1) / (sqq * s11 - sq1 * sq1);
     2.0 * c
@@ -97,7 +112,11 @@ fn the_slip_speed_law_lets_the_same_box_creep() {
     // The seeds' law vanishes at zero slip: the contrast that makes the test above meaningful.
     let mut s = box_on_slope(20.0, TangentialLaw::SlipSpeed);
     let x = s.run(2.0);
-    assert!(x.last().unwrap().1 > 1e-3, "the slip-speed law held the box: {:e} m", x.last().unwrap().1);
+    assert!(
+        x.last().unwrap().1 > 1e-3,
+        "the slip-speed law held the box: {:e} m",
+        x.last().unwrap().1
+    );
 }
 
 #[test]
@@ -118,7 +137,13 @@ fn a_sphere_rolls_down_a_slope_without_slipping() {
     // Rolling holds while tan θ < 7/2 μ_s = 1.75; a = 5/7 g sin θ.
     let theta: f64 = 20.0;
     let r = 0.05;
-    let mut s = slope(theta, ColliderBuilder::ball(r), r, Friction::new(0.5, 0.4, 0.01).unwrap(), TangentialLaw::Spring);
+    let mut s = slope(
+        theta,
+        ColliderBuilder::ball(r),
+        r,
+        Friction::new(0.5, 0.4, 0.01).unwrap(),
+        TangentialLaw::Spring,
+    );
     let x = s.run(1.0);
     let rolling: Vec<(f64, f64)> = x.into_iter().filter(|p| p.0 >= 0.25).collect();
     let a = fitted_acceleration(&rolling);
@@ -153,19 +178,27 @@ struct Rebound {
 }
 
 fn oblique_impact(impact: &Impact) -> Rebound {
-    let Impact { radius: r, density, material: (youngs, poisson), v_t, v_n, mu, restitution } = *impact;
+    let Impact { radius: r, density, material: (youngs, poisson), v_t, v_n, mu, restitution } =
+        *impact;
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::ZERO;
     // The contact lasts ~100 sub-steps of the automatic sub-stepping whatever the step.
     world.integration_parameters.dt = 1e-4;
     let floor = world.insert_body(RigidBodyBuilder::fixed());
     world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(floor));
-    let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, r * 1.002, 0.0)).linvel(Vector::new(v_t, -v_n, 0.0)));
+    let ball = world.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, r * 1.002, 0.0))
+            .linvel(Vector::new(v_t, -v_n, 0.0)),
+    );
     world.insert_collider(ColliderBuilder::ball(r).density(density), Some(ball));
-    let mut contacts = DiscreteContacts::new(OverlapSettings::new(6, IntegrationMode::Subcell).unwrap(), restitution)
-        .unwrap()
-        .with_friction(Friction::new(mu, mu, 1e-3).unwrap())
-        .with_policy(StepPolicy::AutoSubstep { max_substeps: 5000 });
+    let mut contacts = DiscreteContacts::new(
+        OverlapSettings::new(6, IntegrationMode::Subcell).unwrap(),
+        restitution,
+    )
+    .unwrap()
+    .with_friction(Friction::new(mu, mu, 1e-3).unwrap())
+    .with_policy(StepPolicy::AutoSubstep { max_substeps: 5000 });
     // A rigid floor, as both bodies at twice the modulus: the same effective modulus
     // E / (1 − ν²) and the same tangential stiffness ratio 2 (1 − ν) / (2 − ν).
     contacts.handle_all(&mut world, Material::new(2.0 * youngs, poisson).unwrap()).unwrap();
@@ -177,7 +210,10 @@ fn oblique_impact(impact: &Impact) -> Rebound {
             break;
         }
     }
-    assert!(world.bodies[ball].linvel().y > 0.0 && contacts.contact_count() == 0, "the impact did not end");
+    assert!(
+        world.bodies[ball].linvel().y > 0.0 && contacts.contact_count() == 0,
+        "the impact did not end"
+    );
     let rb = &world.bodies[ball];
     Rebound { v_t: rb.linvel().x, v_n: rb.linvel().y, spin: -rb.angvel().z }
 }
@@ -186,7 +222,15 @@ fn oblique_impact(impact: &Impact) -> Rebound {
 /// floor; returns (v_n'/v_n, v_t'/v_n, R ω'/v_n).
 fn steel_impact(tan_incidence: f64, mu: f64, restitution: f64) -> (f64, f64, f64) {
     let r = 0.05;
-    let b = oblique_impact(&Impact { radius: r, density: 7800.0, material: (1e11, 0.3), v_t: tan_incidence, v_n: 1.0, mu, restitution });
+    let b = oblique_impact(&Impact {
+        radius: r,
+        density: 7800.0,
+        material: (1e11, 0.3),
+        v_t: tan_incidence,
+        v_n: 1.0,
+        mu,
+        restitution,
+    });
     (b.v_n, b.v_t, b.spin * r)
 }
 
@@ -199,8 +243,16 @@ fn an_oblique_impact_that_slides_throughout_follows_impulse_theory() {
     let (e, vt, rw) = steel_impact(4.0, mu, 0.9);
     assert!((e - 0.9).abs() < 0.02, "normal restitution {e}");
     let impulse = mu * (1.0 + e);
-    assert!((vt - (4.0 - impulse)).abs() < 0.01 * 4.0, "v_t'/v_n = {vt}, impulse theory {}", 4.0 - impulse);
-    assert!((rw / (2.5 * impulse) - 1.0).abs() < 0.02, "R ω'/v_n = {rw}, impulse theory {}", 2.5 * impulse);
+    assert!(
+        (vt - (4.0 - impulse)).abs() < 0.01 * 4.0,
+        "v_t'/v_n = {vt}, impulse theory {}",
+        4.0 - impulse
+    );
+    assert!(
+        (rw / (2.5 * impulse) - 1.0).abs() < 0.02,
+        "R ω'/v_n = {rw}, impulse theory {}",
+        2.5 * impulse
+    );
 }
 
 #[test]
@@ -213,7 +265,10 @@ fn a_steep_elastic_impact_that_sticks_returns_its_tangential_energy() {
     // ν = 0.3 (the tangential oscillation completes nearly one period in the contact time).
     let (e, vt, rw) = steel_impact(0.3, 5.0, 1.0);
     let contact_point = (vt - rw) / 0.3;
-    assert!((contact_point - 0.955).abs() < 0.03, "contact point leaves at {contact_point} of its incident speed");
+    assert!(
+        (contact_point - 0.955).abs() < 0.03,
+        "contact point leaves at {contact_point} of its incident speed"
+    );
     // Elastic: the kinetic energy (per unit mass, with I = 2/5 m R²) comes back whole.
     let energy = |v2: f64, w2: f64| 0.5 * v2 + 0.5 * 0.4 * w2;
     let ratio = energy(e * e + vt * vt, rw * rw) / energy(1.0 + 0.09, 0.0);
@@ -250,15 +305,33 @@ fn oblique_impacts_rebound_as_the_dem_benchmark_tabulates() {
     // above, it slides throughout as impulse theory says. Tolerances: the references' angles
     // are digitised from plots (a few tenths of a degree).
     let (r, speed, mu, e) = (2.5e-3, 3.9, 0.092, 0.98);
-    println!("{:>6} {:>14} {:>18} {:>22}   (Chung & Ooi)", "θ (°)", "v_t'/v_t", "ω' (rad/s)", "contact angle (°)");
+    println!(
+        "{:>6} {:>14} {:>18} {:>22}   (Chung & Ooi)",
+        "θ (°)", "v_t'/v_t", "ω' (rad/s)", "contact angle (°)"
+    );
     for &(theta, et_ref, spin_ref, phi_ref) in &CHUNG_OOI_TEST_4 {
         let (s, c) = theta.to_radians().sin_cos();
-        let b = oblique_impact(&Impact { radius: r, density: 4000.0, material: (3.8e11, 0.23), v_t: speed * s, v_n: speed * c, mu, restitution: e });
+        let b = oblique_impact(&Impact {
+            radius: r,
+            density: 4000.0,
+            material: (3.8e11, 0.23),
+            v_t: speed * s,
+            v_n: speed * c,
+            mu,
+            restitution: e,
+        });
         let e_t = b.v_t / (speed * s);
         let phi = ((b.v_t - r * b.spin) / b.v_n).atan().to_degrees();
         println!("{theta:>6.0} {e_t:>7.3} ({et_ref:>5.3}) {:>9.1} ({spin_ref:>6.1}) {phi:>11.2} ({phi_ref:>6.2})", b.spin);
         assert!((e_t - et_ref).abs() <= 0.02, "θ = {theta}°: v_t'/v_t = {e_t}, tabulated {et_ref}");
-        assert!((b.spin - spin_ref).abs() <= 0.05 * 617.0, "θ = {theta}°: ω' = {} rad/s, tabulated {spin_ref}", b.spin);
-        assert!((phi - phi_ref).abs() <= 1.5, "θ = {theta}°: contact point leaves at {phi}°, tabulated {phi_ref}°");
+        assert!(
+            (b.spin - spin_ref).abs() <= 0.05 * 617.0,
+            "θ = {theta}°: ω' = {} rad/s, tabulated {spin_ref}",
+            b.spin
+        );
+        assert!(
+            (phi - phi_ref).abs() <= 1.5,
+            "θ = {theta}°: contact point leaves at {phi}°, tabulated {phi_ref}°"
+        );
     }
 }

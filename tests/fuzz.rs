@@ -10,8 +10,8 @@
 //! other seeds: `PROPTEST_RNG_SEED=7 PROPTEST_CASES=20000 cargo test --release --test fuzz`.
 
 use discrete_contact::math::{Pose, Real, Rotation, Vector};
-use discrete_contact::prelude::*;
 use discrete_contact::parry3d_f64::shape::SharedShape;
+use discrete_contact::prelude::*;
 use proptest::prelude::*;
 
 /// Cases per property unless `PROPTEST_CASES` says otherwise; a fixed seed unless
@@ -36,10 +36,13 @@ fn shape(kind: u8, s: Real, a: Real, b: Real, hull: &[[Real; 3]]) -> (SharedShap
         1 => SharedShape::cuboid(s, a * s, b * s),
         2 => SharedShape::cylinder(a * s, s),
         3 => SharedShape::cone(a * s, s),
-        4 => SharedShape::capsule(Vector::new(0.0, -a * s, 0.0), Vector::new(0.0, a * s, 0.0), b * s),
+        4 => {
+            SharedShape::capsule(Vector::new(0.0, -a * s, 0.0), Vector::new(0.0, a * s, 0.0), b * s)
+        }
         5 => SharedShape::round_cuboid(s, a * s, b * s, 0.1 * s),
         _ => {
-            let points: Vec<Vector> = hull.iter().map(|p| Vector::from(*p).normalize_or(Vector::X) * s).collect();
+            let points: Vec<Vector> =
+                hull.iter().map(|p| Vector::from(*p).normalize_or(Vector::X) * s).collect();
             SharedShape::convex_hull(&points).unwrap_or_else(|| SharedShape::ball(s))
         }
     };
@@ -104,7 +107,18 @@ struct PairCase {
 
 /// Checks one pair; returns whether it was in contact.
 fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
-    let PairCase { kinds, scale, ratio, aspect, hulls, poses: (pa, pb), velocities: (va, vb), material: (modulus, nu, e), grid: (n_c, subcell, friction, exact), closeness } = c.clone();
+    let PairCase {
+        kinds,
+        scale,
+        ratio,
+        aspect,
+        hulls,
+        poses: (pa, pb),
+        velocities: (va, vb),
+        material: (modulus, nu, e),
+        grid: (n_c, subcell, friction, exact),
+        closeness,
+    } = c.clone();
     let s = 10f64.powf(scale);
     let (parry_a, a) = shape(kinds.0, s, aspect[0], aspect[1], &hulls.0);
     let (parry_b, b) = shape(kinds.1, s * 10f64.powf(ratio), aspect[2], aspect[3], &hulls.1);
@@ -112,14 +126,23 @@ fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
     // deep overlaps, grazing touches and pairs just apart.
     let sum = s * (1.0 + 10f64.powf(ratio));
     let pa = Pose::from_parts(pa.translation * sum, pa.rotation);
-    let pb = Pose::from_parts(pa.translation + pb.translation.normalize_or(Vector::Y) * closeness * sum, pb.rotation);
+    let pb = Pose::from_parts(
+        pa.translation + pb.translation.normalize_or(Vector::Y) * closeness * sum,
+        pb.rotation,
+    );
     let material = Material::new(10f64.powf(modulus), nu).unwrap();
     let mut params = PairParameters::new(&material, &material, e).unwrap();
     if friction {
         params = params.with_friction(Friction::new(0.5, 0.3, 1e-3).unwrap());
     }
     let mode = if subcell { IntegrationMode::Subcell } else { IntegrationMode::Count };
-    let model = ContactModel::new(params, OverlapSettings::new(n_c, mode).unwrap().with_closed_form_spheres(exact).with_exact_polyhedra(exact));
+    let model = ContactModel::new(
+        params,
+        OverlapSettings::new(n_c, mode)
+            .unwrap()
+            .with_closed_form_spheres(exact)
+            .with_exact_polyhedra(exact),
+    );
     let ba = BodyState::at_rest(&a, pa).moving(va.0, va.1);
     let bb = BodyState::at_rest(&b, pb).moving(vb.0, vb.1);
     let ab = model.evaluate(&ba, &bb, &mut None);
@@ -129,7 +152,8 @@ fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
         (x, y) => return Err(TestCaseError::fail(format!("refused a valid pair: {x:?} / {y:?}"))),
     };
     // Apart (by parry's exact distance, with a margin for the grid): no force either way.
-    let gap = discrete_contact::parry3d_f64::query::distance(&pa, &*parry_a, &pb, &*parry_b).map_or(0.0, |d| d.distance);
+    let gap = discrete_contact::parry3d_f64::query::distance(&pa, &*parry_a, &pb, &*parry_b)
+        .map_or(0.0, |d| d.distance);
     if gap > 1e-9 * s {
         prop_assert!(ab.is_none() && rev.is_none(), "force at distance {gap}");
     }
@@ -148,17 +172,27 @@ fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
             // direction (soaks saw 5–9 % asymmetry there, an arbitrary one for a body wholly
             // inside); the drop-in refuses such depths before they happen (indentation limit),
             // so only finite output is asserted for them.
-            let smaller = parry_a.mass_properties(1.0).mass().min(parry_b.mass_properties(1.0).mass());
+            let smaller =
+                parry_a.mass_properties(1.0).mass().min(parry_b.mass_properties(1.0).mass());
             if x.geometry.volume <= 0.5 * smaller {
-                prop_assert!((f.force_on_a + y.force.force_on_a).length() <= 1e-6 * size + 1e-300,
-                    "asymmetric: {:?} vs {:?} (overlap {:.2} of the smaller body)", f.force_on_a, y.force.force_on_a, x.geometry.volume / smaller);
+                prop_assert!(
+                    (f.force_on_a + y.force.force_on_a).length() <= 1e-6 * size + 1e-300,
+                    "asymmetric: {:?} vs {:?} (overlap {:.2} of the smaller body)",
+                    f.force_on_a,
+                    y.force.force_on_a,
+                    x.geometry.volume / smaller
+                );
             }
         }
         (None, None) => return Ok(false),
         // A grazing touch can be found from one side and missed from the other only when
         // the overlap is below the grid's resolution.
         (Some(x), None) | (None, Some(x)) => {
-            prop_assert!(x.geometry.volume <= 1e-9 * s * s * s, "one-sided contact with volume {}", x.geometry.volume);
+            prop_assert!(
+                x.geometry.volume <= 1e-9 * s * s * s,
+                "one-sided contact with volume {}",
+                x.geometry.volume
+            );
         }
     }
     Ok(true)

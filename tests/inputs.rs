@@ -39,7 +39,10 @@ fn restitution_friction_and_resolution() {
     let s = OverlapSettings::new(4, IntegrationMode::Count).unwrap();
     assert_eq!(names(s.with_enlargement(-1e-3, 0.0).unwrap_err()), "enlargement_a");
     let p = PairParameters::new(&m, &m, 0.5).unwrap();
-    assert_eq!(names(p.with_stiffness(StiffnessFactor::Custom(0.0)).unwrap_err()), "stiffness factor k");
+    assert_eq!(
+        names(p.with_stiffness(StiffnessFactor::Custom(0.0)).unwrap_err()),
+        "stiffness factor k"
+    );
     assert_eq!(names(p.with_min_approach_speed(-1.0).unwrap_err()), "min_approach_speed");
     for m_t in [0.0, -1.0, f64::NAN] {
         assert_eq!(names(p.with_tangential_mass(m_t).unwrap_err()), "tangential_mass");
@@ -51,9 +54,15 @@ fn shape_sizes() {
     assert_eq!(names(ConvexShape::ball(0.0).unwrap_err()), "radius");
     assert_eq!(names(ConvexShape::ball(f64::NAN).unwrap_err()), "radius");
     assert_eq!(names(ConvexShape::cylinder(-1.0, 1.0).unwrap_err()), "half_height");
-    assert_eq!(names(ConvexShape::cuboid(Vector::new(1.0, 0.0, 1.0)).unwrap_err()), "half_extents.y");
+    assert_eq!(
+        names(ConvexShape::cuboid(Vector::new(1.0, 0.0, 1.0)).unwrap_err()),
+        "half_extents.y"
+    );
     assert_eq!(names(ConvexShape::half_space(Vector::ZERO).unwrap_err()), "normal");
-    assert!(matches!(ConvexShape::capsule(Vector::splat(f64::NAN), Vector::ZERO, 1.0), Err(Error::NonFinite { .. })));
+    assert!(matches!(
+        ConvexShape::capsule(Vector::splat(f64::NAN), Vector::ZERO, 1.0),
+        Err(Error::NonFinite { .. })
+    ));
     assert!(ConvexShape::convex_hull(&[Vector::ZERO, Vector::X, Vector::Y]).is_err());
 }
 
@@ -61,15 +70,21 @@ fn shape_sizes() {
 fn non_finite_states_and_unbounded_pairs() {
     let ball = ConvexShape::ball(0.1).unwrap();
     let m = Material::new(1e9, 0.3).unwrap();
-    let model = ContactModel::new(PairParameters::new(&m, &m, 0.5).unwrap(), OverlapSettings::new(4, IntegrationMode::Subcell).unwrap());
+    let model = ContactModel::new(
+        PairParameters::new(&m, &m, 0.5).unwrap(),
+        OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(),
+    );
     let ok = BodyState::at_rest(&ball, Pose::IDENTITY);
-    let nan_pose = BodyState::at_rest(&ball, Pose::from_translation(Vector::new(f64::NAN, 0.0, 0.0)));
+    let nan_pose =
+        BodyState::at_rest(&ball, Pose::from_translation(Vector::new(f64::NAN, 0.0, 0.0)));
     assert!(matches!(model.evaluate(&nan_pose, &ok, &mut None), Err(Error::NonFinite { .. })));
-    let nan_vel = BodyState::at_rest(&ball, Pose::IDENTITY).moving(Vector::new(0.0, f64::INFINITY, 0.0), Vector::ZERO);
+    let nan_vel = BodyState::at_rest(&ball, Pose::IDENTITY)
+        .moving(Vector::new(0.0, f64::INFINITY, 0.0), Vector::ZERO);
     assert!(matches!(model.evaluate(&ok, &nan_vel, &mut None), Err(Error::NonFinite { .. })));
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let wall = ConvexShape::half_space(Vector::X).unwrap();
-    let (f, w) = (BodyState::at_rest(&floor, Pose::IDENTITY), BodyState::at_rest(&wall, Pose::IDENTITY));
+    let (f, w) =
+        (BodyState::at_rest(&floor, Pose::IDENTITY), BodyState::at_rest(&wall, Pose::IDENTITY));
     assert!(matches!(model.evaluate(&f, &w, &mut None), Err(Error::UnboundedOverlap { .. })));
     // Hostile but finite sizes give finite results.
     for r in [1e-9, 1e6] {
@@ -88,9 +103,16 @@ fn enlargement_makes_a_near_miss_a_contact() {
     let params = PairParameters::new(&m, &m, 0.5).unwrap();
     let a = BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.1005, 0.0)));
     let f = BodyState::at_rest(&floor, Pose::IDENTITY);
-    let plain = ContactModel::new(params, OverlapSettings::new(8, IntegrationMode::Subcell).unwrap());
+    let plain =
+        ContactModel::new(params, OverlapSettings::new(8, IntegrationMode::Subcell).unwrap());
     assert!(plain.evaluate(&a, &f, &mut None).unwrap().is_none());
-    let enlarged = ContactModel::new(params, OverlapSettings::new(8, IntegrationMode::Subcell).unwrap().with_enlargement(1e-3, 0.0).unwrap());
+    let enlarged = ContactModel::new(
+        params,
+        OverlapSettings::new(8, IntegrationMode::Subcell)
+            .unwrap()
+            .with_enlargement(1e-3, 0.0)
+            .unwrap(),
+    );
     let out = enlarged.evaluate(&a, &f, &mut None).unwrap().unwrap();
     assert!((out.geometry.indentation - 0.5e-3).abs() < 1e-6, "{}", out.geometry.indentation);
 }

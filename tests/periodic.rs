@@ -7,14 +7,20 @@ use discrete_contact::periodic::PeriodicBox;
 use discrete_contact::prelude::*;
 use discrete_contact::rapier::DiscreteContacts;
 use discrete_contact::rapier3d_f64::prelude::*;
-use discrete_contact::validation::hindered_settling::{run, HinderedSettling, ParticleShape, SettlingRun};
+use discrete_contact::validation::hindered_settling::{
+    run, HinderedSettling, ParticleShape, SettlingRun,
+};
 
 const L: Real = 0.1;
 const R: Real = 0.01;
 
 /// Two steel-density balls in a periodic box without gravity, soft enough that a contact lasts
 /// many steps.
-fn two_balls(a: Vector, b: Vector, va: Vector) -> (PhysicsWorld, DiscreteContacts, [RigidBodyHandle; 2], [ColliderHandle; 2]) {
+fn two_balls(
+    a: Vector,
+    b: Vector,
+    va: Vector,
+) -> (PhysicsWorld, DiscreteContacts, [RigidBodyHandle; 2], [ColliderHandle; 2]) {
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::ZERO;
     world.integration_parameters.dt = 1e-4;
@@ -23,10 +29,14 @@ fn two_balls(a: Vector, b: Vector, va: Vector) -> (PhysicsWorld, DiscreteContact
     let mut colliders = [ColliderHandle::invalid(); 2];
     for (k, (p, v)) in [(a, va), (b, Vector::ZERO)].into_iter().enumerate() {
         bodies[k] = world.insert_body(RigidBodyBuilder::dynamic().translation(p).linvel(v));
-        colliders[k] = world.insert_collider(ColliderBuilder::ball(R).density(7800.0), Some(bodies[k]));
+        colliders[k] =
+            world.insert_collider(ColliderBuilder::ball(R).density(7800.0), Some(bodies[k]));
     }
     let domain = PeriodicBox::new(Vector::ZERO, Vector::splat(L), [true; 3]).unwrap();
-    let mut contacts = DiscreteContacts::new(OverlapSettings::new(6, IntegrationMode::Subcell).unwrap(), 0.95).unwrap().with_periodic(domain);
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(6, IntegrationMode::Subcell).unwrap(), 0.95)
+            .unwrap()
+            .with_periodic(domain);
     for c in colliders {
         contacts.handle(&mut world, c, Material::new(1e6, 0.3).unwrap()).unwrap();
     }
@@ -57,7 +67,10 @@ fn a_body_crossing_a_periodic_face_keeps_its_momentum_and_its_contact() {
             wrapped_in_contact |= x < 0.05;
         }
         let p = momentum(&world, &bodies);
-        assert!((p - p0).length() < 1e-12 * p0.length().max(1.0) + 1e-12, "momentum {p:?} vs {p0:?}");
+        assert!(
+            (p - p0).length() < 1e-12 * p0.length().max(1.0) + 1e-12,
+            "momentum {p:?} vs {p0:?}"
+        );
     }
     assert!(wrapped_in_contact, "A was moved back through x = L while the contact lasted");
     assert_eq!(contacts.contact_count(), 0, "the bodies have parted");
@@ -75,16 +88,26 @@ fn bodies_touching_across_a_corner_feel_equal_and_opposite_forces_as_inside_the_
     for a in [Vector::new(L - 0.004, L - 0.002, 0.05), Vector::new(0.05, 0.05, 0.05)] {
         let b = a + offset;
         let wrapped = b - Vector::new((b.x / L).floor() * L, (b.y / L).floor() * L, 0.0);
-        let (mut world, mut contacts, bodies, _) = two_balls(a, wrapped, Vector::new(0.2, -0.1, 0.05));
+        let (mut world, mut contacts, bodies, _) =
+            two_balls(a, wrapped, Vector::new(0.2, -0.1, 0.05));
         let v0: Vec<Vector> = bodies.iter().map(|&h| world.bodies[h].linvel()).collect();
         contacts.step(&mut world).unwrap();
         let m: Vec<Real> = bodies.iter().map(|&h| world.bodies[h].mass()).collect();
-        let impulse: Vec<Vector> = (0..2).map(|k| (world.bodies[bodies[k]].linvel() - v0[k]) * m[k]).collect();
+        let impulse: Vec<Vector> =
+            (0..2).map(|k| (world.bodies[bodies[k]].linvel() - v0[k]) * m[k]).collect();
         assert!(impulse[0].length() > 0.0, "the pair touches");
-        assert!((impulse[0] + impulse[1]).length() <= 1e-12 * impulse[0].length(), "F_AB = -F_BA: {impulse:?}");
+        assert!(
+            (impulse[0] + impulse[1]).length() <= 1e-12 * impulse[0].length(),
+            "F_AB = -F_BA: {impulse:?}"
+        );
         dv.push(impulse[0]);
     }
-    assert!((dv[0] - dv[1]).length() <= 1e-9 * dv[1].length(), "across the corner {:?} vs inside {:?}", dv[0], dv[1]);
+    assert!(
+        (dv[0] - dv[1]).length() <= 1e-9 * dv[1].length(),
+        "across the corner {:?} vs inside {:?}",
+        dv[0],
+        dv[1]
+    );
 }
 
 #[test]
@@ -100,10 +123,16 @@ fn the_fluid_acts_on_a_body_across_periodic_faces_as_inside_the_box() {
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::ZERO;
         let centre = Vector::splat(0.5 * n * dx + shift);
-        let b = world.insert_body(RigidBodyBuilder::dynamic().translation(centre).linvel(Vector::new(0.01, 0.0, 0.0)).angvel(Vector::new(0.0, 0.0, 5.0)));
+        let b = world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .translation(centre)
+                .linvel(Vector::new(0.01, 0.0, 0.0))
+                .angvel(Vector::new(0.0, 0.0, 5.0)),
+        );
         let c = world.insert_collider(ColliderBuilder::ball(3e-3).density(2000.0), Some(b));
         let settings = FluidSettings::new(dx, 1e-4, 1e-6, 1000.0).unwrap();
-        let mut fluid = Fluid::new(Vector::ZERO, Vector::splat(n * dx), [true; 3], settings).unwrap();
+        let mut fluid =
+            Fluid::new(Vector::ZERO, Vector::splat(n * dx), [true; 3], settings).unwrap();
         fluid.couple(&world, c).unwrap();
         let mut history = Vec::new();
         for _ in 0..10 {
@@ -112,7 +141,9 @@ fn the_fluid_acts_on_a_body_across_periodic_faces_as_inside_the_box() {
         }
         results.push(history);
     }
-    let total = |h: &[(Vector, Vector)]| h.iter().fold((Vector::ZERO, Vector::ZERO), |a, s| (a.0 + s.0, a.1 + s.1));
+    let total = |h: &[(Vector, Vector)]| {
+        h.iter().fold((Vector::ZERO, Vector::ZERO), |a, s| (a.0 + s.0, a.1 + s.1))
+    };
     let (f, t) = total(&results[0]);
     assert!(f.x < 0.0 && t.z < 0.0, "the fluid brakes the motion and the spin: {f:?}, {t:?}");
     for ((f0, t0), (f1, t1)) in results[0].iter().zip(&results[1]) {
@@ -179,11 +210,18 @@ fn a_sphere_alone_in_a_periodic_box_settles_as_the_stokes_cubic_array() {
         }
         let ((vp_60, uf_60), (vp_end, uf_end)) = (at_60.unwrap(), velocities(&settling));
         for (what, early, late) in [("sphere", vp_60, vp_end), ("fluid mean", uf_60, uf_end)] {
-            assert!((late - early).abs() < 0.02 * vp_end.abs(), "{what} velocity drifts: {early} -> {late} m/s (sphere {vp_end})");
+            assert!(
+                (late - early).abs() < 0.02 * vp_end.abs(),
+                "{what} velocity drifts: {early} -> {late} m/s (sphere {vp_end})"
+            );
         }
         let r = settling.finish();
         assert_eq!(r.particles, 1);
-        assert!(r.momentum_imbalance.abs() < 1e-3, "net force {} of the net weight", r.momentum_imbalance);
+        assert!(
+            r.momentum_imbalance.abs() < 1e-3,
+            "net force {} of the net weight",
+            r.momentum_imbalance
+        );
         let v_over_u = r.v_mean_over_vs * case.terminal_velocity() / case.stokes_velocity();
         // Solve v/U = (a/a_eff) / K(φ (a_eff/a)³) for a_eff/a by bisection (v/U falls with a_eff).
         let (mut lo, mut hi) = (0.5, 1.5);
@@ -200,7 +238,10 @@ fn a_sphere_alone_in_a_periodic_box_settles_as_the_stokes_cubic_array() {
     let (phi_dense, v_dense, a_dense) = effective_radius(12);
     let (phi_dilute, v_dilute, a_dilute) = effective_radius(24);
     // The hindrance itself is large: without the array's K both would be near 1 / a_eff.
-    assert!(v_dense < 0.6 && v_dilute < 0.85, "v/U = {v_dense} at φ = {phi_dense}, {v_dilute} at φ = {phi_dilute}");
+    assert!(
+        v_dense < 0.6 && v_dilute < 0.85,
+        "v/U = {v_dense} at φ = {phi_dense}, {v_dilute} at φ = {phi_dilute}"
+    );
     // A lattice sphere of 6 nodes is hydrodynamically a few tenths of Δx smaller (τ = 1).
     assert!((0.8..1.0).contains(&a_dense), "effective radius {a_dense} of the geometric one");
     assert!(
@@ -218,7 +259,11 @@ fn bad_periodic_and_settling_input_is_refused_by_name() {
     let e = PeriodicBox::new(Vector::ZERO, Vector::new(1.0, 0.0, 1.0), [true; 3]).unwrap_err();
     assert_eq!(name(e), "periodic box size (max - min)");
     let e = PeriodicBox::new(Vector::splat(Real::NAN), Vector::ONE, [true; 3]).unwrap_err();
-    assert!(matches!(e, discrete_contact::Error::NonFinite { .. } | discrete_contact::Error::InvalidParameter { .. }));
+    assert!(matches!(
+        e,
+        discrete_contact::Error::NonFinite { .. }
+            | discrete_contact::Error::InvalidParameter { .. }
+    ));
     for f in [0.0, -1.0, 1.5, Real::NAN] {
         assert_eq!(contacts_limit(f).err().map(name), Some("indentation_limit"));
     }
@@ -236,7 +281,9 @@ fn bad_periodic_and_settling_input_is_refused_by_name() {
 }
 
 fn contacts_limit(f: Real) -> discrete_contact::Result<DiscreteContacts> {
-    DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9).unwrap().with_indentation_limit(f)
+    DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9)
+        .unwrap()
+        .with_indentation_limit(f)
 }
 
 /// Randomly oriented cubes jam under random sequential addition before φ = 30 % (the placement
@@ -257,11 +304,17 @@ fn cubes_at_thirty_percent_are_placed_without_overlap() {
     let cube = Cuboid::new(Vector::splat(half));
     let mut closest = Real::INFINITY;
     for (i, a) in poses.iter().enumerate() {
-        assert!((0..3).all(|d| (0.0..l).contains(&a.translation[d])), "{:?} outside the box", a.translation);
+        assert!(
+            (0..3).all(|d| (0.0..l).contains(&a.translation[d])),
+            "{:?} outside the box",
+            a.translation
+        );
         for b in &poses[i + 1..] {
             let mut b = *b;
             b.translation += domain.nearest_image_shift(a.translation, b.translation);
-            let d = discrete_contact::parry3d_f64::query::distance(a, &cube, &b, &cube).unwrap().distance;
+            let d = discrete_contact::parry3d_f64::query::distance(a, &cube, &b, &cube)
+                .unwrap()
+                .distance;
             closest = closest.min(d);
         }
     }

@@ -50,9 +50,24 @@ fn model(mode: IntegrationMode, n: usize, e: f64) -> ContactModel {
 fn oblique_pair() -> (ConvexShape, Pose, Vector, Vector, ConvexShape, Pose, Vector, Vector) {
     let cube = ConvexShape::cuboid(Vector::new(0.05, 0.04, 0.03)).unwrap();
     let cyl = ConvexShape::cylinder(0.06, 0.03).unwrap();
-    let pa = Pose::from_parts(Vector::new(0.01, 0.058, -0.005), Rotation::from_euler(discrete_contact::parry3d_f64::glamx::EulerRot::XYZ, 0.3, 0.2, 0.1));
-    let pb = Pose::from_parts(Vector::new(0.0, -0.01, 0.0), Rotation::from_euler(discrete_contact::parry3d_f64::glamx::EulerRot::XYZ, 0.1, -0.4, 1.2));
-    (cube, pa, Vector::new(0.1, -0.5, 0.2), Vector::new(1.0, 2.0, -3.0), cyl, pb, Vector::new(-0.1, 0.3, 0.0), Vector::new(0.5, 0.0, 1.0))
+    let pa = Pose::from_parts(
+        Vector::new(0.01, 0.058, -0.005),
+        Rotation::from_euler(discrete_contact::parry3d_f64::glamx::EulerRot::XYZ, 0.3, 0.2, 0.1),
+    );
+    let pb = Pose::from_parts(
+        Vector::new(0.0, -0.01, 0.0),
+        Rotation::from_euler(discrete_contact::parry3d_f64::glamx::EulerRot::XYZ, 0.1, -0.4, 1.2),
+    );
+    (
+        cube,
+        pa,
+        Vector::new(0.1, -0.5, 0.2),
+        Vector::new(1.0, 2.0, -3.0),
+        cyl,
+        pb,
+        Vector::new(-0.1, 0.3, 0.0),
+        Vector::new(0.5, 0.0, 1.0),
+    )
 }
 
 #[test]
@@ -76,12 +91,19 @@ fn forces_are_equal_and_opposite_when_the_roles_swap() {
 #[test]
 fn force_is_invariant_under_a_rigid_motion_of_the_pair() {
     let (sa, pa, va, wa, sb, pb, vb, wb) = oblique_pair();
-    let motion = Pose::from_parts(Vector::new(3.0, -2.0, 7.5), Rotation::from_axis_angle(Vector::new(1.0, 2.0, 3.0).normalize(), 2.1));
+    let motion = Pose::from_parts(
+        Vector::new(3.0, -2.0, 7.5),
+        Rotation::from_axis_angle(Vector::new(1.0, 2.0, 3.0).normalize(), 2.1),
+    );
     let r = motion.rotation;
     for mode in [IntegrationMode::Count, IntegrationMode::Subcell] {
         let m = model(mode, 8, 0.8);
         let before = m
-            .evaluate(&BodyState::at_rest(&sa, pa).moving(va, wa), &BodyState::at_rest(&sb, pb).moving(vb, wb), &mut None)
+            .evaluate(
+                &BodyState::at_rest(&sa, pa).moving(va, wa),
+                &BodyState::at_rest(&sb, pb).moving(vb, wb),
+                &mut None,
+            )
             .unwrap()
             .unwrap();
         let after = m
@@ -94,9 +116,16 @@ fn force_is_invariant_under_a_rigid_motion_of_the_pair() {
             .unwrap();
         let f = before.force.force_on_a;
         assert!((r * f - after.force.force_on_a).length() <= 1e-8 * f.length(), "{mode:?}");
-        assert!((r * before.force.torque_on_a - after.force.torque_on_a).length() <= 1e-8 * before.force.torque_on_a.length().max(1e-12));
+        assert!(
+            (r * before.force.torque_on_a - after.force.torque_on_a).length()
+                <= 1e-8 * before.force.torque_on_a.length().max(1e-12)
+        );
         assert_relative_eq!(before.geometry.volume, after.geometry.volume, max_relative = 1e-9);
-        assert_relative_eq!(before.geometry.indentation, after.geometry.indentation, max_relative = 1e-9);
+        assert_relative_eq!(
+            before.geometry.indentation,
+            after.geometry.indentation,
+            max_relative = 1e-9
+        );
     }
 }
 
@@ -110,7 +139,8 @@ fn no_force_when_apart_and_the_contact_ends() {
     assert!(m.evaluate(&touching, &b, &mut state).unwrap().is_some());
     assert!(state.is_some());
     for gap in [1e-9, 1e-4, 0.05] {
-        let apart = BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.2 + gap, 0.0)));
+        let apart =
+            BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.2 + gap, 0.0)));
         assert!(m.evaluate(&apart, &b, &mut state).unwrap().is_none(), "gap {gap}");
         assert!(state.is_none());
     }
@@ -118,9 +148,14 @@ fn no_force_when_apart_and_the_contact_ends() {
 
 #[test]
 fn force_grows_monotonically_with_indentation() {
-    for case in [HertzCase::SphereHalfSpace { r: 1.0 }, HertzCase::CrossedCylinders { r: 1.0 }, HertzCase::Punch { r: 1.0 }] {
+    for case in [
+        HertzCase::SphereHalfSpace { r: 1.0 },
+        HertzCase::CrossedCylinders { r: 1.0 },
+        HertzCase::Punch { r: 1.0 },
+    ] {
         let s = settings(8, IntegrationMode::Subcell);
-        let forces: Vec<f64> = (1..=40).map(|i| case.force(&s, 0.05 * i as f64 / 40.0).unwrap()).collect();
+        let forces: Vec<f64> =
+            (1..=40).map(|i| case.force(&s, 0.05 * i as f64 / 40.0).unwrap()).collect();
         for w in forces.windows(2) {
             assert!(w[1] > w[0], "{}: {} then {}", case.name(), w[0], w[1]);
         }
@@ -156,14 +191,24 @@ fn friction_law_limits() {
     let m = Material::new(1e8, 0.3).unwrap();
     let params = PairParameters::new(&m, &m, 1.0).unwrap().with_friction(f);
     let model = ContactModel::new(params, settings(8, IntegrationMode::Subcell));
-    let a = BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.099, 0.0))).moving(Vector::new(50.0, 0.0, 0.0), Vector::ZERO);
-    let out = model.evaluate(&a, &BodyState::at_rest(&floor, Pose::IDENTITY), &mut None).unwrap().unwrap();
+    let a = BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.099, 0.0)))
+        .moving(Vector::new(50.0, 0.0, 0.0), Vector::ZERO);
+    let out = model
+        .evaluate(&a, &BodyState::at_rest(&floor, Pose::IDENTITY), &mut None)
+        .unwrap()
+        .unwrap();
     let fc = out.force;
     assert!(fc.force_on_a.x < 0.0);
     assert_relative_eq!(fc.tangential_force, 0.3 * fc.normal_force, max_relative = 1e-4);
     // Frictionless pair: no tangential force at all.
-    let plain = ContactModel::new(PairParameters::new(&m, &m, 1.0).unwrap(), settings(8, IntegrationMode::Subcell));
-    let out = plain.evaluate(&a, &BodyState::at_rest(&floor, Pose::IDENTITY), &mut None).unwrap().unwrap();
+    let plain = ContactModel::new(
+        PairParameters::new(&m, &m, 1.0).unwrap(),
+        settings(8, IntegrationMode::Subcell),
+    );
+    let out = plain
+        .evaluate(&a, &BodyState::at_rest(&floor, Pose::IDENTITY), &mut None)
+        .unwrap()
+        .unwrap();
     assert_eq!(out.force.tangential_force, 0.0);
 }
 
@@ -174,7 +219,10 @@ fn damping_is_fixed_at_first_touch() {
     let m = model(IntegrationMode::Subcell, 6, 0.85);
     let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
     let mut state: Option<ContactState> = None;
-    let at = |y: f64, v: f64| BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, y, 0.0))).moving(Vector::new(0.0, -v, 0.0), Vector::ZERO);
+    let at = |y: f64, v: f64| {
+        BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, y, 0.0)))
+            .moving(Vector::new(0.0, -v, 0.0), Vector::ZERO)
+    };
     m.evaluate(&at(0.0999, 1.0), &wall, &mut state).unwrap().unwrap();
     let c = state.unwrap().damping;
     assert_relative_eq!(c, 0.26401, epsilon = 1e-4);
@@ -186,7 +234,11 @@ fn damping_is_fixed_at_first_touch() {
 /// the rebound speed ratio is the restitution, and an elastic contact creates no energy.
 #[test]
 fn dynamic_impact_restitution_and_no_energy_created() {
-    for (e, mode) in [(0.85, IntegrationMode::Subcell), (1.0, IntegrationMode::Subcell), (0.85, IntegrationMode::Count)] {
+    for (e, mode) in [
+        (0.85, IntegrationMode::Subcell),
+        (1.0, IntegrationMode::Subcell),
+        (0.85, IntegrationMode::Count),
+    ] {
         let r = 0.005;
         let ball = ConvexShape::ball(r).unwrap();
         let mat = Material::new(5e8, 0.35).unwrap();
@@ -195,7 +247,10 @@ fn dynamic_impact_restitution_and_no_energy_created() {
         let (v, ..) = drop_on_wall(&m, &ball, Rotation::IDENTITY, r, mass);
         let measured = v / 1.0;
         if e < 1.0 {
-            assert!((measured - e).abs() <= 0.03 * e, "{mode:?}: restitution {measured:.4} for e = {e}");
+            assert!(
+                (measured - e).abs() <= 0.03 * e,
+                "{mode:?}: restitution {measured:.4} for e = {e}"
+            );
         }
         assert!(measured <= 1.0 + 2e-3, "{mode:?}: energy created, rebound {measured}");
         assert!(measured >= 0.97 * e, "{mode:?}: rebound {measured}");
@@ -205,16 +260,24 @@ fn dynamic_impact_restitution_and_no_energy_created() {
 /// A body dropped at 1 m/s on a wall (translation only), integrated with velocity Verlet
 /// through the contact by `model`: (rebound speed, peak normal force, full evaluations, all
 /// evaluations).
-fn drop_on_wall(model: &ContactModel, shape: &ConvexShape, rotation: Rotation, lowest: f64, mass: f64) -> (f64, f64, usize, usize) {
+fn drop_on_wall(
+    model: &ContactModel,
+    shape: &ConvexShape,
+    rotation: Rotation,
+    lowest: f64,
+    mass: f64,
+) -> (f64, f64, usize, usize) {
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
     let (mut y, mut v, dt) = (lowest + 1e-7, -1.0, 2e-7);
     let (mut state, mut peak, mut full, mut all) = (None, 0.0f64, 0, 0);
     let mut force = |y: f64, v: f64, state: &mut Option<ContactState>| {
-        let body = BodyState::at_rest(shape, Pose::from_parts(Vector::new(0.0, y, 0.0), rotation)).moving(Vector::new(0.0, v, 0.0), Vector::ZERO);
+        let body = BodyState::at_rest(shape, Pose::from_parts(Vector::new(0.0, y, 0.0), rotation))
+            .moving(Vector::new(0.0, v, 0.0), Vector::ZERO);
         let out = model.evaluate(&body, &wall, state).unwrap();
         if let Some(o) = &out {
-            (peak, full, all) = (peak.max(o.force.normal_force), full + usize::from(o.full), all + 1);
+            (peak, full, all) =
+                (peak.max(o.force.normal_force), full + usize::from(o.full), all + 1);
         }
         out.map_or(0.0, |o| o.force.force_on_a.y)
     };
@@ -243,7 +306,12 @@ fn drop_on_wall(model: &ContactModel, shape: &ConvexShape, rotation: Rotation, l
 #[test]
 fn geometry_reuse_keeps_impacts_as_full_evaluation_gives_them() {
     let mat = Material::new(5e8, 0.35).unwrap();
-    let full_model = |n| ContactModel::new(PairParameters::new(&mat, &mat, 0.8).unwrap(), settings(n, IntegrationMode::Subcell));
+    let full_model = |n| {
+        ContactModel::new(
+            PairParameters::new(&mat, &mat, 0.8).unwrap(),
+            settings(n, IntegrationMode::Subcell),
+        )
+    };
     let r = 0.005;
     let ball = ConvexShape::ball(r).unwrap();
     let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
@@ -261,17 +329,44 @@ fn geometry_reuse_keeps_impacts_as_full_evaluation_gives_them() {
     ];
     for (name, shape, rotation, lowest) in cases {
         let reference = drop_on_wall(&full_model(6), shape, rotation, lowest, mass);
-        let reused = drop_on_wall(&full_model(6).with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap(), shape, rotation, lowest, mass);
-        let loose = drop_on_wall(&full_model(6).with_geometry_reuse(100.0 * discrete_contact::contact::GEOMETRY_REUSE).unwrap(), shape, rotation, lowest, mass);
-        let error = |run: (f64, f64, usize, usize)| ((run.0 / reference.0 - 1.0).abs(), (run.1 / reference.1 - 1.0).abs());
+        let reused = drop_on_wall(
+            &full_model(6).with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap(),
+            shape,
+            rotation,
+            lowest,
+            mass,
+        );
+        let loose = drop_on_wall(
+            &full_model(6)
+                .with_geometry_reuse(100.0 * discrete_contact::contact::GEOMETRY_REUSE)
+                .unwrap(),
+            shape,
+            rotation,
+            lowest,
+            mass,
+        );
+        let error = |run: (f64, f64, usize, usize)| {
+            ((run.0 / reference.0 - 1.0).abs(), (run.1 / reference.1 - 1.0).abs())
+        };
         let (e_v, e_f) = error(reused);
         println!("{name}: rebound {:.5} / {:.5} (full / reused), peak force {:.4} / {:.4} N, full evaluations {} of {}; loose: rebound {:.5}, peak {:.4} N, {} full", reference.0, reused.0, reference.1, reused.1, reused.2, reused.3, loose.0, loose.1, loose.2);
         assert_eq!(reference.2, reference.3, "reuse off evaluates in full every time");
-        assert!(e_v < 0.01 && e_f < 0.01, "{name}: rebound off by {e_v:.4}, peak force by {e_f:.4}");
-        assert!(reused.2 * 2 < reused.3, "{name}: reuse skipped too few full evaluations ({} of {})", reused.2, reused.3);
+        assert!(
+            e_v < 0.01 && e_f < 0.01,
+            "{name}: rebound off by {e_v:.4}, peak force by {e_f:.4}"
+        );
+        assert!(
+            reused.2 * 2 < reused.3,
+            "{name}: reuse skipped too few full evaluations ({} of {})",
+            reused.2,
+            reused.3
+        );
         if name == "tilted cube" {
             let (l_v, l_f) = error(loose);
-            assert!(l_v.max(l_f) > 0.01, "a far too loose bound must show: rebound off by {l_v:.4}, peak by {l_f:.4}");
+            assert!(
+                l_v.max(l_f) > 0.01,
+                "a far too loose bound must show: rebound off by {l_v:.4}, peak by {l_f:.4}"
+            );
         }
     }
 }
@@ -284,22 +379,31 @@ fn geometry_reuse_keeps_impacts_as_full_evaluation_gives_them() {
 #[test]
 fn persistent_contact_is_as_accurate_as_a_fresh_evaluation() {
     let (sa, pa, va, wa, sb, pb, vb, wb) = oblique_pair();
-    let (m, fine) = (model(IntegrationMode::Subcell, 8, 0.8), model(IntegrationMode::Subcell, 64, 0.8));
+    let (m, fine) =
+        (model(IntegrationMode::Subcell, 8, 0.8), model(IntegrationMode::Subcell, 64, 0.8));
     let b = BodyState::at_rest(&sb, pb).moving(vb, wb);
     let mut state = None;
     let (mut followed_err, mut fresh_err) = (0.0, 0.0);
     for i in 0..30 {
         let s = i as f64 / 29.0;
-        let motion = Pose::from_parts(Vector::new(0.004 * s, -0.006 * s, 0.003 * s), Rotation::from_rotation_y(0.2 * s));
+        let motion = Pose::from_parts(
+            Vector::new(0.004 * s, -0.006 * s, 0.003 * s),
+            Rotation::from_rotation_y(0.2 * s),
+        );
         let a = BodyState::at_rest(&sa, motion * pa).moving(va, wa);
-        let volume = |m: &ContactModel, st: &mut Option<ContactState>| m.evaluate(&a, &b, st).unwrap().expect("overlap").geometry.volume;
+        let volume = |m: &ContactModel, st: &mut Option<ContactState>| {
+            m.evaluate(&a, &b, st).unwrap().expect("overlap").geometry.volume
+        };
         let reference = volume(&fine, &mut None);
         followed_err += (volume(&m, &mut state) / reference - 1.0).abs() / 30.0;
         fresh_err += (volume(&m, &mut None) / reference - 1.0).abs() / 30.0;
         assert!(state.is_some(), "the contact must persist");
     }
     println!("mean relative volume error: followed {followed_err:.4}, fresh {fresh_err:.4}");
-    assert!(followed_err <= 0.04 && followed_err <= 1.2 * fresh_err, "followed {followed_err:.4}, fresh {fresh_err:.4}");
+    assert!(
+        followed_err <= 0.04 && followed_err <= 1.2 * fresh_err,
+        "followed {followed_err:.4}, fresh {fresh_err:.4}"
+    );
 }
 
 /// A contact begun at a crawl and then driven hard (a third body lands on the pair) re-bases
@@ -312,7 +416,10 @@ fn damping_rebases_when_a_contact_is_driven_faster() {
     let m = model(IntegrationMode::Subcell, 6, 0.5);
     let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
     let mut state: Option<ContactState> = None;
-    let at = |v: f64| BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.0995, 0.0))).moving(Vector::new(0.0, -v, 0.0), Vector::ZERO);
+    let at = |v: f64| {
+        BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, 0.0995, 0.0)))
+            .moving(Vector::new(0.0, -v, 0.0), Vector::ZERO)
+    };
     m.evaluate(&at(1e-3), &wall, &mut state).unwrap().unwrap();
     let crawl = state.unwrap().damping;
     let hard = m.evaluate(&at(2.0), &wall, &mut state).unwrap().unwrap();
@@ -335,11 +442,15 @@ fn a_contact_begun_at_a_vanishing_overlap_is_kept_when_it_deepens() {
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let m = model(IntegrationMode::Subcell, 4, 0.85);
     let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
-    let at = |y: f64| BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, y, 0.0))).moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO);
+    let at = |y: f64| {
+        BodyState::at_rest(&ball, Pose::from_translation(Vector::new(0.0, y, 0.0)))
+            .moving(Vector::new(0.0, -1.0, 0.0), Vector::ZERO)
+    };
     let mut state: Option<ContactState> = None;
     m.evaluate(&at(r - 1e-18), &wall, &mut state).unwrap();
     assert!(state.is_some(), "the touch starts a contact");
-    let deeper = m.evaluate(&at(r - d), &wall, &mut state).unwrap().expect("the deeper overlap is found");
+    let deeper =
+        m.evaluate(&at(r - d), &wall, &mut state).unwrap().expect("the deeper overlap is found");
     assert_relative_eq!(deeper.geometry.indentation, d, max_relative = 0.02);
     let fresh = m.evaluate(&at(r - d), &wall, &mut None).unwrap().unwrap();
     assert_relative_eq!(deeper.geometry.volume, fresh.geometry.volume, max_relative = 0.05);
@@ -364,32 +475,57 @@ fn closed_form_sphere_overlaps_match_the_fine_grid() {
         let eps = [0.02 * rnd(), 0.02 * rnd()];
         let dir = Vector::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
         let depth = 0.3 * rnd() * ra.min(rb);
-        let rot = Rotation::from_axis_angle(Vector::new(rnd(), rnd(), 1.0).normalize(), 6.0 * rnd());
+        let rot =
+            Rotation::from_axis_angle(Vector::new(rnd(), rnd(), 1.0).normalize(), 6.0 * rnd());
         let half_space = k % 2 == 1;
-        let b = if half_space { ConvexShape::half_space(dir).unwrap() } else { ConvexShape::ball(rb).unwrap() };
-        let pose_b = Pose::from_parts(Vector::new(rnd(), rnd(), rnd()), if half_space { Rotation::IDENTITY } else { rot });
+        let b = if half_space {
+            ConvexShape::half_space(dir).unwrap()
+        } else {
+            ConvexShape::ball(rb).unwrap()
+        };
+        let pose_b = Pose::from_parts(
+            Vector::new(rnd(), rnd(), rnd()),
+            if half_space { Rotation::IDENTITY } else { rot },
+        );
         let reach = if half_space { ra } else { ra + rb };
-        let pose_a = Pose::from_parts(pose_b.translation + dir * (reach + eps[0] + eps[1] - depth), rot);
+        let pose_a =
+            Pose::from_parts(pose_b.translation + dir * (reach + eps[0] + eps[1] - depth), rot);
         let a = ConvexShape::ball(ra).unwrap();
         for swap in [false, true] {
             let s = fine.with_enlargement(eps[0], eps[1]).unwrap();
-            let (s, x, px, y, py) = if swap { (fine.with_enlargement(eps[1], eps[0]).unwrap(), &b, &pose_b, &a, &pose_a) } else { (s, &a, &pose_a, &b, &pose_b) };
-            let grid = compute_overlap(x, px, y, py, &s, None).unwrap().expect("overlap on the grid");
-            let exact = compute_overlap(x, px, y, py, &s.with_closed_form_spheres(true), None).unwrap().expect("overlap in closed form");
+            let (s, x, px, y, py) = if swap {
+                (fine.with_enlargement(eps[1], eps[0]).unwrap(), &b, &pose_b, &a, &pose_a)
+            } else {
+                (s, &a, &pose_a, &b, &pose_b)
+            };
+            let grid =
+                compute_overlap(x, px, y, py, &s, None).unwrap().expect("overlap on the grid");
+            let exact = compute_overlap(x, px, y, py, &s.with_closed_form_spheres(true), None)
+                .unwrap()
+                .expect("overlap in closed form");
             let errs = [
                 (exact.volume / grid.volume - 1.0).abs(),
                 // Against the overlap's width (a thin lens is far wider than deep).
-                (exact.contact_point - grid.contact_point).length() / (exact.volume / exact.indentation).sqrt(),
+                (exact.contact_point - grid.contact_point).length()
+                    / (exact.volume / exact.indentation).sqrt(),
                 (exact.normal - grid.normal).length(),
                 (exact.indentation / grid.indentation - 1.0).abs(),
             ];
             for (w, e) in worst.iter_mut().zip(errs) {
                 *w = w.max(e);
             }
-            assert!(errs[0] < 2e-3 && errs[1] < 1e-2 && errs[2] < 1e-3 && errs[3] < 1e-2, "pair {k} swap {swap}: {errs:?}");
+            assert!(
+                errs[0] < 2e-3 && errs[1] < 1e-2 && errs[2] < 1e-3 && errs[3] < 1e-2,
+                "pair {k} swap {swap}: {errs:?}"
+            );
             // Pulled apart: no overlap either way.
-            let apart = Pose::from_parts(px.translation + exact.normal * (1.01 * exact.indentation), px.rotation);
-            assert!(compute_overlap(x, &apart, y, py, &s.with_closed_form_spheres(true), None).unwrap().is_none());
+            let apart = Pose::from_parts(
+                px.translation + exact.normal * (1.01 * exact.indentation),
+                px.rotation,
+            );
+            assert!(compute_overlap(x, &apart, y, py, &s.with_closed_form_spheres(true), None)
+                .unwrap()
+                .is_none());
         }
     }
     println!("largest differences (volume, point / width, normal, indentation): {:.2e} {:.2e} {:.2e} {:.2e}", worst[0], worst[1], worst[2], worst[3]);
@@ -412,17 +548,9 @@ fn exact_polyhedron_overlap_of_a_cube_corner_in_a_plane() {
         let g = compute_overlap(&cube, &pose, &ground, &Pose::IDENTITY, &s, None)
             .unwrap()
             .expect("a corner in the ground");
-        assert_relative_eq!(
-            g.volume,
-            0.75f64.sqrt() * delta.powi(3),
-            max_relative = 1e-9
-        );
+        assert_relative_eq!(g.volume, 0.75f64.sqrt() * delta.powi(3), max_relative = 1e-9);
         assert_relative_eq!(g.indentation, delta, max_relative = 1e-9);
-        assert!(
-            (g.normal - Vector::Y).length() < 1e-9,
-            "normal {:?}",
-            g.normal
-        );
+        assert!((g.normal - Vector::Y).length() < 1e-9, "normal {:?}", g.normal);
         let expected = Vector::new(centre.x, -0.25 * delta, centre.z);
         assert!(
             (g.contact_point - expected).length() < 1e-9 * delta,
@@ -431,11 +559,9 @@ fn exact_polyhedron_overlap_of_a_cube_corner_in_a_plane() {
         );
         // Lifted clear of the ground: no overlap.
         let lifted = Pose::from_parts(centre + Vector::Y * 2.0 * delta, spin * tilt);
-        assert!(
-            compute_overlap(&cube, &lifted, &ground, &Pose::IDENTITY, &s, None)
-                .unwrap()
-                .is_none()
-        );
+        assert!(compute_overlap(&cube, &lifted, &ground, &Pose::IDENTITY, &s, None)
+            .unwrap()
+            .is_none());
     }
 }
 
@@ -465,12 +591,25 @@ fn exact_polyhedra_take_a_user_sdfs_planes_at_any_scale_and_refuse_zero_ones_to_
         }
     }
     let cube = ConvexShape::cuboid(Vector::new(0.5, 0.4, 0.3)).unwrap();
-    let pose_a = Pose::from_parts(Vector::new(0.1, 0.2, -0.1), Rotation::from_scaled_axis(Vector::new(0.3, -0.2, 0.5)));
-    let pose_b = Pose::from_parts(Vector::new(0.8, 0.5, 0.2), Rotation::from_scaled_axis(Vector::new(-0.4, 0.6, 0.1)));
-    let exact = settings(8, IntegrationMode::Subcell).with_enlargement(0.01, 0.02).unwrap().with_exact_polyhedra(true);
-    let reference = compute_overlap(&cube, &pose_a, &cube, &pose_b, &exact, None).unwrap().expect("the boxes overlap");
+    let pose_a = Pose::from_parts(
+        Vector::new(0.1, 0.2, -0.1),
+        Rotation::from_scaled_axis(Vector::new(0.3, -0.2, 0.5)),
+    );
+    let pose_b = Pose::from_parts(
+        Vector::new(0.8, 0.5, 0.2),
+        Rotation::from_scaled_axis(Vector::new(-0.4, 0.6, 0.1)),
+    );
+    let exact = settings(8, IntegrationMode::Subcell)
+        .with_enlargement(0.01, 0.02)
+        .unwrap()
+        .with_exact_polyhedra(true);
+    let reference = compute_overlap(&cube, &pose_a, &cube, &pose_b, &exact, None)
+        .unwrap()
+        .expect("the boxes overlap");
     let scaled = Planes { cube: cube.clone(), scale: [3.0, 0.2, 1.0, 7.5, 0.01, 2.0] };
-    let g = compute_overlap(&scaled, &pose_a, &cube, &pose_b, &exact, None).unwrap().expect("the boxes overlap");
+    let g = compute_overlap(&scaled, &pose_a, &cube, &pose_b, &exact, None)
+        .unwrap()
+        .expect("the boxes overlap");
     assert_relative_eq!(g.volume, reference.volume, max_relative = 1e-12);
     assert!((g.contact_point - reference.contact_point).length() < 1e-12);
     assert!((g.normal - reference.normal).length() < 1e-12);
@@ -481,7 +620,10 @@ fn exact_polyhedra_take_a_user_sdfs_planes_at_any_scale_and_refuse_zero_ones_to_
     let on_grid = compute_overlap(&cube, &pose_a, &cube, &pose_b, &grid, None).unwrap().unwrap();
     let g = compute_overlap(&zero, &pose_a, &cube, &pose_b, &exact, None).unwrap().unwrap();
     assert_eq!(g.volume, on_grid.volume);
-    assert!((g.volume / reference.volume - 1.0).abs() > 1e-9, "the grid differs from the exact volume");
+    assert!(
+        (g.volume / reference.volume - 1.0).abs() > 1e-9,
+        "the grid differs from the exact volume"
+    );
 }
 
 #[test]
@@ -490,9 +632,7 @@ fn exact_polyhedron_overlaps_match_the_fine_grid() {
     let fine = settings(48, IntegrationMode::Subcell);
     let mut seed = 777u64;
     let mut rnd = || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (seed >> 11) as f64 / (1u64 << 53) as f64
     };
     let hull: Vec<Vector> = (0..12)
@@ -518,11 +658,7 @@ fn exact_polyhedron_overlaps_match_the_fine_grid() {
         };
         let pose_b = Pose::from_parts(
             Vector::new(rnd(), rnd(), rnd()),
-            if k % 3 == 2 {
-                Rotation::IDENTITY
-            } else {
-                rot(&mut rnd)
-            },
+            if k % 3 == 2 { Rotation::IDENTITY } else { rot(&mut rnd) },
         );
         let rot_a = rot(&mut rnd);
         // Push A into B along a random direction until the overlap is a few per cent of A.
@@ -544,14 +680,10 @@ fn exact_polyhedron_overlaps_match_the_fine_grid() {
         }
         let pose_a = Pose::from_parts(base + dir * t, rot_a);
         for swap in [false, true] {
-            let (x, px, y, py) = if swap {
-                (b, &pose_b, a, &pose_a)
-            } else {
-                (a, &pose_a, b, &pose_b)
-            };
-            let grid = compute_overlap(x, px, y, py, &fine, None)
-                .unwrap()
-                .expect("overlap on the grid");
+            let (x, px, y, py) =
+                if swap { (b, &pose_b, a, &pose_a) } else { (a, &pose_a, b, &pose_b) };
+            let grid =
+                compute_overlap(x, px, y, py, &fine, None).unwrap().expect("overlap on the grid");
             let exact = compute_overlap(x, px, y, py, &fine.with_exact_polyhedra(true), None)
                 .unwrap()
                 .expect("exact overlap");
@@ -582,19 +714,37 @@ fn exact_polyhedron_enlargement_moves_the_faces_out_sharp_vertices_included() {
     // (≈ 20 ε_A, far past the rounded enlargement's bounds, so the first clipping box is too
     // small and a larger one is taken); the ground rises by ε_B. The overlap is the tip of
     // the same slopes, depth H = δ + 20.025 ε_A + ε_B, volume (4/3) 0.05² H³.
-    let pyramid = ConvexShape::convex_hull(&[Vector::ZERO, Vector::new(0.05, 1.0, 0.05), Vector::new(-0.05, 1.0, 0.05), Vector::new(0.05, 1.0, -0.05), Vector::new(-0.05, 1.0, -0.05)]).unwrap();
+    let pyramid = ConvexShape::convex_hull(&[
+        Vector::ZERO,
+        Vector::new(0.05, 1.0, 0.05),
+        Vector::new(-0.05, 1.0, 0.05),
+        Vector::new(0.05, 1.0, -0.05),
+        Vector::new(-0.05, 1.0, -0.05),
+    ])
+    .unwrap();
     let ground = ConvexShape::half_space(Vector::Y).unwrap();
-    for (delta, eps_a, eps_b) in [(0.01, 0.0, 0.0), (0.01, 2e-3, 0.0), (1e-4, 1e-3, 5e-4), (0.05, 4e-3, 1e-3)] {
-        let s = settings(8, IntegrationMode::Subcell).with_enlargement(eps_a, eps_b).unwrap().with_exact_polyhedra(true);
+    for (delta, eps_a, eps_b) in
+        [(0.01, 0.0, 0.0), (0.01, 2e-3, 0.0), (1e-4, 1e-3, 5e-4), (0.05, 4e-3, 1e-3)]
+    {
+        let s = settings(8, IntegrationMode::Subcell)
+            .with_enlargement(eps_a, eps_b)
+            .unwrap()
+            .with_exact_polyhedra(true);
         let pose = Pose::from_translation(Vector::new(0.4, -delta, -0.3));
-        let g = compute_overlap(&pyramid, &pose, &ground, &Pose::IDENTITY, &s, None).unwrap().expect("a tip in the ground");
+        let g = compute_overlap(&pyramid, &pose, &ground, &Pose::IDENTITY, &s, None)
+            .unwrap()
+            .expect("a tip in the ground");
         let depth = delta + eps_a * (1.0f64 + 0.05 * 0.05).sqrt() / 0.05 + eps_b;
         assert_relative_eq!(g.volume, 4.0 / 3.0 * 0.05 * 0.05 * depth.powi(3), max_relative = 1e-9);
         assert_relative_eq!(g.indentation, depth, max_relative = 1e-9);
         assert!((g.normal - Vector::Y).length() < 1e-9, "normal {:?}", g.normal);
         // The tip's centroid: a quarter of the depth below the (raised) ground, on the axis.
         let expected = Vector::new(0.4, eps_b - 0.25 * depth, -0.3);
-        assert!((g.contact_point - expected).length() < 1e-9, "point {:?} vs {expected:?}", g.contact_point);
+        assert!(
+            (g.contact_point - expected).length() < 1e-9,
+            "point {:?} vs {expected:?}",
+            g.contact_point
+        );
     }
 }
 
@@ -602,20 +752,35 @@ fn exact_polyhedron_enlargement_moves_the_faces_out_sharp_vertices_included() {
 /// evaluation (`steps` of them) under the tangential spring (μ_s = 0.5, μ_k = 0.3), the pair
 /// placed by `rotation`; returns the tangential force on the sphere after each (in the pair's
 /// frame, `A`↔`B` swapped when `swap`) and the last normal force.
-fn spring_sequence(shift: Vector, rotation: Rotation, steps: usize, swap: bool) -> (Vec<Vector>, f64) {
+fn spring_sequence(
+    shift: Vector,
+    rotation: Rotation,
+    steps: usize,
+    swap: bool,
+) -> (Vec<Vector>, f64) {
     let ball = ConvexShape::ball(0.1).unwrap();
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let m = Material::new(1e8, 0.3).unwrap();
-    let params = PairParameters::new(&m, &m, 0.8).unwrap().with_friction(Friction::new(0.5, 0.3, 1e-3).unwrap()).with_tangential_law(TangentialLaw::Spring);
+    let params = PairParameters::new(&m, &m, 0.8)
+        .unwrap()
+        .with_friction(Friction::new(0.5, 0.3, 1e-3).unwrap())
+        .with_tangential_law(TangentialLaw::Spring);
     let model = ContactModel::new(params, settings(8, IntegrationMode::Subcell));
     let frame = Pose::from_parts(Vector::new(0.3, -0.2, 0.7), rotation);
     let mut state = None;
     let mut forces = vec![];
     let mut normal = 0.0;
     for k in 0..steps {
-        let a = BodyState::at_rest(&ball, frame * Pose::from_translation(Vector::new(0.0, 0.0999, 0.0) + shift * k as f64));
+        let a = BodyState::at_rest(
+            &ball,
+            frame * Pose::from_translation(Vector::new(0.0, 0.0999, 0.0) + shift * k as f64),
+        );
         let b = BodyState::at_rest(&floor, frame);
-        let out = if swap { model.evaluate(&b, &a, &mut state) } else { model.evaluate(&a, &b, &mut state) };
+        let out = if swap {
+            model.evaluate(&b, &a, &mut state)
+        } else {
+            model.evaluate(&a, &b, &mut state)
+        };
         let f = out.unwrap().expect("overlap").force;
         let on_ball = frame.rotation.inverse() * if swap { f.force_on_b() } else { f.force_on_a };
         forces.push(on_ball - Vector::Y * on_ball.y);
@@ -636,7 +801,11 @@ fn the_tangential_spring_sticks_below_mu_s_then_slides_at_mu_k() {
     assert!((k_t / mindlin - 1.0).abs() < 0.05, "k_t = {k_t}, Mindlin {mindlin}");
     // The hold never exceeds μ_s F_n; past it the contact slides at μ_k F_n and stays there.
     let peak = x.iter().fold(0.0f64, |m, v| m.max(-v));
-    assert!(peak <= 0.5 * f_n * (1.0 + 1e-9) && peak > 0.45 * f_n, "peak {peak}, μ_s F_n {}", 0.5 * f_n);
+    assert!(
+        peak <= 0.5 * f_n * (1.0 + 1e-9) && peak > 0.45 * f_n,
+        "peak {peak}, μ_s F_n {}",
+        0.5 * f_n
+    );
     // (To the grid normal's tilt, a few 1e-6 rad here.)
     assert_relative_eq!(-x[399], 0.3 * f_n, max_relative = 1e-4);
     assert!(f.iter().all(|v| v.z.abs() < 1e-4 * f_n), "sideways force");
@@ -648,11 +817,17 @@ fn the_tangential_spring_is_symmetric_and_moves_rigidly_with_the_pair() {
     let shift = Vector::new(1e-7, 0.0, 4e-8);
     let (plain, _) = spring_sequence(shift, Rotation::IDENTITY, 200, false);
     let (swapped, _) = spring_sequence(shift, Rotation::IDENTITY, 200, true);
-    let (turned, _) = spring_sequence(shift, Rotation::from_scaled_axis(Vector::new(0.4, -1.1, 0.7)), 200, false);
+    let (turned, _) =
+        spring_sequence(shift, Rotation::from_scaled_axis(Vector::new(0.4, -1.1, 0.7)), 200, false);
     // A persistent contact keeps its grid in the frame it chose, so the two orders and the
     // rotated pair integrate on different grids: they agree to the grid's resolution.
     let scale = plain.iter().map(|v| v.length()).fold(0.0, f64::max);
-    let worst = |other: &[Vector]| (0..200).map(|k| (plain[k] - other[k]).length() / scale).fold(0.0, f64::max);
+    let worst = |other: &[Vector]| {
+        (0..200).map(|k| (plain[k] - other[k]).length() / scale).fold(0.0, f64::max)
+    };
     let (ab, rigid) = (worst(&swapped), worst(&turned));
-    assert!(ab < 1e-4 && rigid < 1e-4, "A↔B differ by {ab:e}, rotated by {rigid:e} of the largest force");
+    assert!(
+        ab < 1e-4 && rigid < 1e-4,
+        "A↔B differ by {ab:e}, rotated by {rigid:e} of the largest force"
+    );
 }

@@ -15,7 +15,11 @@ fn cylinder_impact_matches_park_within_0_05() {
         let r = simulate(theta, s).unwrap();
         let (v, w) = park(theta);
         assert!((r.v_ratio - v).abs() < 0.05, "θ = {theta}: v+/v {} vs {v}", r.v_ratio);
-        assert!((r.omega_r_ratio - w).abs() < 0.05, "θ = {theta}: Rω+/v {} vs {w}", r.omega_r_ratio);
+        assert!(
+            (r.omega_r_ratio - w).abs() < 0.05,
+            "θ = {theta}: Rω+/v {} vs {w}",
+            r.omega_r_ratio
+        );
     }
 }
 
@@ -23,12 +27,20 @@ fn ball_on_floor(dt: f64, policy: StepPolicy) -> (PhysicsWorld, DiscreteContacts
     let mut world = PhysicsWorld::new();
     world.integration_parameters.dt = dt;
     let floor = world.insert_body(RigidBodyBuilder::fixed());
-    world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(discrete_contact::math::Vector::Y)), Some(floor));
+    world.insert_collider(
+        ColliderBuilder::new(SharedShape::halfspace(discrete_contact::math::Vector::Y)),
+        Some(floor),
+    );
     let ball = world.insert_body(
-        RigidBodyBuilder::dynamic().translation(discrete_contact::math::Vector::new(0.0, 0.0101, 0.0)).linvel(discrete_contact::math::Vector::new(0.0, -2.0, 0.0)),
+        RigidBodyBuilder::dynamic()
+            .translation(discrete_contact::math::Vector::new(0.0, 0.0101, 0.0))
+            .linvel(discrete_contact::math::Vector::new(0.0, -2.0, 0.0)),
     );
     world.insert_collider(ColliderBuilder::ball(0.01).density(7800.0), Some(ball));
-    let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9).unwrap().with_policy(policy);
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9)
+            .unwrap()
+            .with_policy(policy);
     contacts.handle_all(&mut world, Material::new(2e11, 0.3).unwrap()).unwrap();
     (world, contacts, ball)
 }
@@ -55,7 +67,8 @@ fn a_step_too_large_for_the_contact_is_refused_with_advice() {
 
 #[test]
 fn automatic_substeps_resolve_a_stiff_impact_and_keep_user_forces() {
-    let (mut world, mut contacts, ball) = ball_on_floor(1e-4, StepPolicy::AutoSubstep { max_substeps: 5000 });
+    let (mut world, mut contacts, ball) =
+        ball_on_floor(1e-4, StepPolicy::AutoSubstep { max_substeps: 5000 });
     // A user force: pushes sideways; it must act exactly as without the contact model.
     world.bodies[ball].add_force(discrete_contact::math::Vector::new(1e-3, 0.0, 0.0), true);
     let mut max_sub = 0;
@@ -105,18 +118,25 @@ fn contact_forces_do_not_depend_on_the_thread_count() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
             let mut scene = bin_scene(12);
-            let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
-                .unwrap()
-                .with_substeps_per_contact(6.0)
-                .unwrap()
-                .with_friction(discrete_contact::Friction::new(0.5, 0.4, 0.01).unwrap());
+            let mut contacts = DiscreteContacts::new(
+                OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(),
+                0.5,
+            )
+            .unwrap()
+            .with_substeps_per_contact(6.0)
+            .unwrap()
+            .with_friction(discrete_contact::Friction::new(0.5, 0.4, 0.01).unwrap());
             contacts.handle_all(&mut scene.world, Material::new(5e6, 0.4).unwrap()).unwrap();
             let mut touched = 0;
             for _ in 0..60 {
                 touched = touched.max(contacts.step(&mut scene.world).unwrap().contacts);
             }
             assert!(touched >= 4, "the bodies must land: {touched} contacts");
-            scene.bodies.iter().map(|h| (scene.world.bodies[*h].translation(), scene.world.bodies[*h].angvel())).collect::<Vec<_>>()
+            scene
+                .bodies
+                .iter()
+                .map(|h| (scene.world.bodies[*h].translation(), scene.world.bodies[*h].angvel()))
+                .collect::<Vec<_>>()
         })
     };
     assert_eq!(run(1), run(2));
@@ -129,9 +149,16 @@ fn contact_forces_do_not_depend_on_the_thread_count() {
 #[test]
 fn a_stiff_impact_does_not_depend_on_where_the_scene_is_in_f64_and_stalls_in_f32() {
     use discrete_contact::validation::precision::{Ending, Impact};
-    let at = |offset: f64, f32_state: bool| Impact { youngs: 2e11, speed: 0.01, offset }.run(f32_state).unwrap();
-    let (Ending::Rebound(near), Ending::Rebound(far)) = (at(0.0, false), at(10.0, false)) else { panic!("f64 impacts must rebound") };
-    assert!(near < 0.01 && (near - far).abs() < 1e-3, "restitution error {near} at the origin, {far} 10 m away");
+    let at = |offset: f64, f32_state: bool| {
+        Impact { youngs: 2e11, speed: 0.01, offset }.run(f32_state).unwrap()
+    };
+    let (Ending::Rebound(near), Ending::Rebound(far)) = (at(0.0, false), at(10.0, false)) else {
+        panic!("f64 impacts must rebound")
+    };
+    assert!(
+        near < 0.01 && (near - far).abs() < 1e-3,
+        "restitution error {near} at the origin, {far} 10 m away"
+    );
     assert_eq!(at(10.0, true), Ending::Stuck);
 }
 
@@ -148,9 +175,16 @@ fn a_spinning_ball_stays_put_with_geometry_reuse() {
     world.integration_parameters.dt = 1e-4;
     let floor = world.insert_body(RigidBodyBuilder::fixed());
     world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(floor));
-    let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, r, 0.0)).angvel(Vector::new(0.0, 0.0, 20.0)).can_sleep(false));
+    let ball = world.insert_body(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, r, 0.0))
+            .angvel(Vector::new(0.0, 0.0, 20.0))
+            .can_sleep(false),
+    );
     world.insert_collider(ColliderBuilder::ball(r).density(7800.0), Some(ball));
-    let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5).unwrap();
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+            .unwrap();
     contacts.handle_all(&mut world, Material::new(5e8, 0.3).unwrap()).unwrap();
     let (mut full, mut all) = (0, 0);
     for _ in 0..2000 {

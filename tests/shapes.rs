@@ -3,7 +3,9 @@
 
 use discrete_contact::parry3d_f64::math::Vector;
 use discrete_contact::parry3d_f64::query::PointQuery;
-use discrete_contact::parry3d_f64::shape::{Ball, Capsule, Cone, ConvexPolyhedron, Cuboid, Cylinder, RoundCuboid, Shape, SharedShape};
+use discrete_contact::parry3d_f64::shape::{
+    Ball, Capsule, Cone, ConvexPolyhedron, Cuboid, Cylinder, RoundCuboid, Shape, SharedShape,
+};
 use discrete_contact::prelude::*;
 use discrete_contact::Error;
 
@@ -39,7 +41,10 @@ fn parry_shapes() -> Vec<(&'static str, Box<dyn Shape>)> {
         ("cuboid", Box::new(Cuboid::new(Vector::new(0.3, 0.2, 0.1)))),
         ("cylinder", Box::new(Cylinder::new(0.25, 0.15))),
         ("cone", Box::new(Cone::new(0.25, 0.2))),
-        ("capsule", Box::new(Capsule::new(Vector::new(-0.1, -0.2, 0.0), Vector::new(0.2, 0.1, 0.05), 0.1))),
+        (
+            "capsule",
+            Box::new(Capsule::new(Vector::new(-0.1, -0.2, 0.0), Vector::new(0.2, 0.1, 0.05), 0.1)),
+        ),
         ("polyhedron", Box::new(hull)),
     ]
 }
@@ -54,8 +59,15 @@ fn distances_match_parry_inside_and_outside() {
             let p = rng.point(0.5);
             let reference = shape.distance_to_local_point(p, false);
             let ours = sdf.distance(p);
-            assert!((ours - reference).abs() <= 1e-9, "{name} at {p:?}: {ours} vs parry {reference}");
-            if reference < 0.0 { inside += 1 } else { outside += 1 }
+            assert!(
+                (ours - reference).abs() <= 1e-9,
+                "{name} at {p:?}: {ours} vs parry {reference}"
+            );
+            if reference < 0.0 {
+                inside += 1
+            } else {
+                outside += 1
+            }
         }
         assert!(inside > 50 && outside > 50, "{name}: {inside} inside, {outside} outside");
     }
@@ -111,7 +123,10 @@ fn half_space_and_custom_sdfs() {
     assert_eq!(hs.distance(Vector::new(5.0, -0.25, 3.0)), -0.25);
     let custom = ConvexShape::custom(
         |p: Vector| p.length() - 0.3,
-        discrete_contact::parry3d_f64::bounding_volume::Aabb::new(Vector::splat(-0.3), Vector::splat(0.3)),
+        discrete_contact::parry3d_f64::bounding_volume::Aabb::new(
+            Vector::splat(-0.3),
+            Vector::splat(0.3),
+        ),
     )
     .unwrap();
     let ball = ConvexShape::ball(0.3).unwrap();
@@ -122,7 +137,10 @@ fn half_space_and_custom_sdfs() {
     // (measured +0.57 % and −1.29 %), on either side of it, both normals within 1e-4 of the floor's.
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let m = Material::new(1e9, 0.3).unwrap();
-    let model = ContactModel::new(PairParameters::new(&m, &m, 0.9).unwrap(), OverlapSettings::new(8, IntegrationMode::Subcell).unwrap());
+    let model = ContactModel::new(
+        PairParameters::new(&m, &m, 0.9).unwrap(),
+        OverlapSettings::new(8, IntegrationMode::Subcell).unwrap(),
+    );
     let pose = Pose::from_translation(Vector::new(0.0, 0.29, 0.0));
     let w = BodyState::at_rest(&floor, Pose::IDENTITY);
     let a = model.evaluate(&BodyState::at_rest(&custom, pose), &w, &mut None).unwrap().unwrap();
@@ -130,7 +148,10 @@ fn half_space_and_custom_sdfs() {
     let d: f64 = 0.01;
     let cap = std::f64::consts::PI * d * d * (3.0 * 0.3 - d) / 3.0;
     let (ea, eb) = (a.geometry.volume / cap - 1.0, b.geometry.volume / cap - 1.0);
-    assert!(ea > 0.0 && ea < 0.01 && eb < 0.0 && eb > -0.015, "closure {ea:+e}, ball {eb:+e} against the cap");
+    assert!(
+        ea > 0.0 && ea < 0.01 && eb < 0.0 && eb > -0.015,
+        "closure {ea:+e}, ball {eb:+e} against the cap"
+    );
     let tilt = [a.geometry.normal, b.geometry.normal].map(|n| (n - Vector::Y).length());
     assert!(tilt[0] < 1e-4 && tilt[1] < 1e-4, "normals tilted by {tilt:?}");
 }
@@ -144,7 +165,10 @@ fn non_convex_parry_shapes_are_refused() {
     .unwrap();
     assert!(matches!(ConvexShape::from_parry(mesh.as_ref()), Err(Error::UnsupportedShape { .. })));
     let compound = SharedShape::compound(vec![(Pose::IDENTITY, SharedShape::ball(1.0))]);
-    assert!(matches!(ConvexShape::from_parry(compound.as_ref()), Err(Error::UnsupportedShape { .. })));
+    assert!(matches!(
+        ConvexShape::from_parry(compound.as_ref()),
+        Err(Error::UnsupportedShape { .. })
+    ));
 }
 
 /// Brute force: the distance to the surface is the smallest exact point–triangle distance over
@@ -160,16 +184,24 @@ fn distances_match_brute_force_over_the_surface() {
     // A rock (twelve points near a sphere, triangular faces) and a box given by its corners
     // (quadrilateral faces): the hull distance's face, edge and vertex regions.
     let mut points = Lcg(11);
-    let rock_points: Vec<Vector> = (0..12).map(|_| points.point(1.0).normalize() * (0.25 + 0.1 * points.next())).collect();
+    let rock_points: Vec<Vector> =
+        (0..12).map(|_| points.point(1.0).normalize() * (0.25 + 0.1 * points.next())).collect();
     let rock = ConvexPolyhedron::from_convex_hull(&rock_points).unwrap();
-    let corners: Vec<Vector> = (0..8).map(|k| Vector::new([-0.3, 0.3][k & 1], [-0.2, 0.2][(k >> 1) & 1], [-0.1, 0.1][k >> 2])).collect();
+    let corners: Vec<Vector> = (0..8)
+        .map(|k| Vector::new([-0.3, 0.3][k & 1], [-0.2, 0.2][(k >> 1) & 1], [-0.1, 0.1][k >> 2]))
+        .collect();
     let box_hull = ConvexPolyhedron::from_convex_hull(&corners).unwrap();
     let cases: Vec<(&str, &dyn Shape, Mesh, f64)> = vec![
         ("polyhedron", &hull, hull.to_trimesh(), 1e-12),
         ("rock", &rock, rock.to_trimesh(), 1e-12),
         ("box hull", &box_hull, box_hull.to_trimesh(), 1e-12),
         ("cuboid", &cuboid, cuboid.to_trimesh(), 1e-12),
-        ("cylinder", &cylinder, cylinder.to_trimesh(512), 0.15 * (1.0 - (std::f64::consts::PI / 512.0).cos()) + 1e-12),
+        (
+            "cylinder",
+            &cylinder,
+            cylinder.to_trimesh(512),
+            0.15 * (1.0 - (std::f64::consts::PI / 512.0).cos()) + 1e-12,
+        ),
     ];
     let mut rng = Lcg(5);
     for (name, shape, (pts, tris), tol) in cases {
@@ -178,7 +210,10 @@ fn distances_match_brute_force_over_the_surface() {
             let p = rng.point(0.45);
             let unsigned = tris
                 .iter()
-                .map(|t| Triangle::new(pts[t[0] as usize], pts[t[1] as usize], pts[t[2] as usize]).distance_to_local_point(p, false))
+                .map(|t| {
+                    Triangle::new(pts[t[0] as usize], pts[t[1] as usize], pts[t[2] as usize])
+                        .distance_to_local_point(p, false)
+                })
                 .fold(f64::INFINITY, f64::min);
             let brute = if shape.contains_local_point(p) { -unsigned } else { unsigned };
             let ours = sdf.distance(p);
@@ -202,7 +237,11 @@ fn closed_form_crossings_equal_the_distance_functions_root() {
         (ConvexShape::cuboid(Vector::new(0.3, 0.1, 0.2)).unwrap(), vec![0.0]),
         (ConvexShape::cylinder(0.2, 0.15).unwrap(), vec![0.0]),
         (ConvexShape::convex_hull(&hull).unwrap(), vec![0.0]),
-        (ConvexShape::capsule(Vector::new(-0.2, 0.05, 0.0), Vector::new(0.15, -0.1, 0.1), 0.12).unwrap(), vec![0.0, 0.02]),
+        (
+            ConvexShape::capsule(Vector::new(-0.2, 0.05, 0.0), Vector::new(0.15, -0.1, 0.1), 0.12)
+                .unwrap(),
+            vec![0.0, 0.02],
+        ),
     ];
     // Compares the closed form with bisection on one segment; false when it does not cross.
     let check = |shape: &ConvexShape, eps: f64, p: Vector, q: Vector| -> bool {
@@ -226,7 +265,10 @@ fn closed_form_crossings_equal_the_distance_functions_root() {
                 hi = mid;
             }
         }
-        assert!((t - lo).abs() * (q - p).length() < 1e-12, "{shape:?} ε = {eps}, {p:?} → {q:?}: {t} vs {lo}");
+        assert!(
+            (t - lo).abs() * (q - p).length() < 1e-12,
+            "{shape:?} ε = {eps}, {p:?} → {q:?}: {t} vs {lo}"
+        );
         true
     };
     let mut g = Lcg(11);
@@ -245,11 +287,19 @@ fn closed_form_crossings_equal_the_distance_functions_root() {
     let capsule = ConvexShape::capsule(a, b, 0.1).unwrap();
     for p in [Vector::ZERO, a - Vector::new(0.05, 0.0, 0.0), b + Vector::new(0.03, 0.01, 0.0)] {
         let q = p + Vector::new(0.0, 0.3, 0.1);
-        assert!(check(&capsule, 0.0, p, q) && check(&capsule, 0.0, q, p) && check(&capsule, 0.02, p, q));
+        assert!(
+            check(&capsule, 0.0, p, q) && check(&capsule, 0.0, q, p) && check(&capsule, 0.02, p, q)
+        );
     }
     // No closed form: the cone, a dilated cuboid.
-    assert!(ConvexShape::cone(0.2, 0.1).unwrap().segment_crossing(Vector::ZERO, Vector::X, 0.0).is_none());
-    assert!(ConvexShape::cuboid(Vector::splat(0.1)).unwrap().segment_crossing(Vector::ZERO, Vector::X, 0.01).is_none());
+    assert!(ConvexShape::cone(0.2, 0.1)
+        .unwrap()
+        .segment_crossing(Vector::ZERO, Vector::X, 0.0)
+        .is_none());
+    assert!(ConvexShape::cuboid(Vector::splat(0.1))
+        .unwrap()
+        .segment_crossing(Vector::ZERO, Vector::X, 0.01)
+        .is_none());
 }
 
 /// Each built-in shape's bounding sphere holds the whole body and touches it: over 4000
@@ -274,9 +324,15 @@ fn bounding_spheres_enclose_the_body_and_touch_it() {
             }
             let s = support.local_support_point(u);
             let reach = (s - centre).length();
-            assert!(reach <= radius * (1.0 + 1e-12), "{name}: extreme point {s:?} at {reach} outside the radius {radius}");
+            assert!(
+                reach <= radius * (1.0 + 1e-12),
+                "{name}: extreme point {s:?} at {reach} outside the radius {radius}"
+            );
             farthest = farthest.max(reach);
         }
-        assert!(farthest >= radius * (1.0 - 1e-3), "{name}: radius {radius}, the body reaches only {farthest}");
+        assert!(
+            farthest >= radius * (1.0 - 1e-3),
+            "{name}: radius {radius}, the body reaches only {farthest}"
+        );
     }
 }

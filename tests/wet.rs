@@ -5,10 +5,12 @@
 use std::sync::OnceLock;
 
 use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod};
+use discrete_contact::hlbm::correlations::{
+    di_felice_wall_factor, schiller_naumann_terminal_velocity,
+};
 use discrete_contact::math::{Real, Rotation, Vector};
 use discrete_contact::rapier3d_f64::prelude::*;
 use discrete_contact::validation::wet_rebound::{run, Trajectory, WetRebound};
-use discrete_contact::hlbm::correlations::{di_felice_wall_factor, schiller_naumann_terminal_velocity};
 
 #[test]
 fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {
@@ -30,8 +32,13 @@ fn settles_at_the_drag_laws_terminal_velocity(method: ForceMethod) {
     let (w, h) = (16.0 * d, 10.0 * d);
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::new(0.0, 0.0, -9.81);
-    let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.5 * w, 0.5 * w, h - 1.5 * d)));
-    let sphere = world.insert_collider(ColliderBuilder::ball(0.5 * d).density(ratio * rho_f), Some(body));
+    let body = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(
+        0.5 * w,
+        0.5 * w,
+        h - 1.5 * d,
+    )));
+    let sphere =
+        world.insert_collider(ColliderBuilder::ball(0.5 * d).density(ratio * rho_f), Some(body));
     let settings = FluidSettings::new(dx, dt, nu, rho_f).unwrap().with_force_method(method);
     let mut fluid = Fluid::closed_box(Vector::ZERO, Vector::new(w, w, h), settings).unwrap();
     fluid.couple(&world, sphere).unwrap();
@@ -78,9 +85,17 @@ fn sphere_rebounds_with_the_contact_and_not_without() {
     let (case, bounce) = with_contact();
     let (_, u) = bounce.impact.expect("the sphere reaches the floor");
     let height = bounce.rebound_height.unwrap_or(0.0);
-    println!("with contact: impact {u:.3} m/s, rebound {:?} m/s, height {:.3} mm", bounce.rebound_speed, height * 1e3);
+    println!(
+        "with contact: impact {u:.3} m/s, rebound {:?} m/s, height {:.3} mm",
+        bounce.rebound_speed,
+        height * 1e3
+    );
     assert!(height > 0.04 * case.release_gap, "rebound height {height}");
-    assert!(bounce.min_gap > -0.1 * case.radius, "the sphere went into the floor: {}", bounce.min_gap);
+    assert!(
+        bounce.min_gap > -0.1 * case.radius,
+        "the sphere went into the floor: {}",
+        bounce.min_gap
+    );
 
     let none = run(&coarse(false), |_, _| {}).unwrap();
     let (t_floor, _) = none.impact.expect("the sphere reaches the floor");
@@ -88,7 +103,10 @@ fn sphere_rebounds_with_the_contact_and_not_without() {
     let mut lowest = Real::INFINITY;
     for &(t, gap, _) in none.samples.iter().filter(|s| s.0 >= t_floor) {
         lowest = lowest.min(gap);
-        assert!(gap < lowest + 1e-5, "rises without contact at t = {t}: gap {gap}, lowest {lowest}");
+        assert!(
+            gap < lowest + 1e-5,
+            "rises without contact at t = {t}: gap {gap}, lowest {lowest}"
+        );
     }
     println!("without contact: lowest gap {:.3} mm", lowest * 1e3);
 }
@@ -113,14 +131,21 @@ fn fluid_refuses_bad_input_by_name() {
     use discrete_contact::Error;
     let name = |e: Error| match e {
         Error::InvalidParameter { name, .. } => name.to_string(),
-        Error::Fluid(discrete_contact::hlbm::Error::InvalidParameter { name, .. }) => name.to_string(),
+        Error::Fluid(discrete_contact::hlbm::Error::InvalidParameter { name, .. }) => {
+            name.to_string()
+        }
         other => panic!("unexpected error {other}"),
     };
     assert_eq!(name(FluidSettings::new(-1e-3, 1e-4, 1e-6, 1000.0).unwrap_err()), "dx");
     assert_eq!(name(FluidSettings::new(1e-3, 1e-4, Real::NAN, 1000.0).unwrap_err()), "nu");
     let settings = FluidSettings::new(1e-3, 1e-4, 1e-6, 1000.0).unwrap();
     assert_eq!(name(settings.with_smoothing(1.0).unwrap_err()), "smoothing");
-    assert_eq!(name(Fluid::closed_box(Vector::ZERO, Vector::new(1e-2, 0.0, 1e-2), settings).err().unwrap()), "fluid box size (max - min)");
+    assert_eq!(
+        name(
+            Fluid::closed_box(Vector::ZERO, Vector::new(1e-2, 0.0, 1e-2), settings).err().unwrap()
+        ),
+        "fluid box size (max - min)"
+    );
     // Only dynamic bodies with bounded shapes swim.
     let mut world = PhysicsWorld::new();
     let fixed = world.insert_body(RigidBodyBuilder::fixed());
@@ -144,25 +169,59 @@ fn the_mapped_field_is_every_nodes_solid_fraction() {
     for periodic in [[true, true, false], [false; 3]] {
         let (dx, size) = (1e-3, Vector::new(24e-3, 20e-3, 22e-3));
         let mut world = PhysicsWorld::new();
-        let settings = FluidSettings::new(dx, 1e-4, 1e-5, 1000.0).unwrap().with_smoothing(1.5 * dx).unwrap();
+        let settings =
+            FluidSettings::new(dx, 1e-4, 1e-5, 1000.0).unwrap().with_smoothing(1.5 * dx).unwrap();
         let mut fluid = Fluid::new(Vector::ZERO, size, periodic, settings).unwrap();
         let rotation = Rotation::from_scaled_axis(Vector::new(0.3, -0.7, 0.4));
         let bodies = [
-            (ColliderBuilder::cuboid(3.1e-3, 2.2e-3, 4.3e-3), Vector::new(6.3e-3, 7.7e-3, 8.1e-3), rotation),
-            (ColliderBuilder::cylinder(2.6e-3, 3.4e-3), Vector::new(if periodic[0] { 0.9e-3 } else { 18.2e-3 }, 12.4e-3, 13.6e-3), rotation.inverse()),
-            (ColliderBuilder::ball(3.7e-3), Vector::new(if periodic[0] { 89.5e-3 } else { 17.5e-3 }, 3.6e-3, 5.5e-3), Rotation::IDENTITY),
+            (
+                ColliderBuilder::cuboid(3.1e-3, 2.2e-3, 4.3e-3),
+                Vector::new(6.3e-3, 7.7e-3, 8.1e-3),
+                rotation,
+            ),
+            (
+                ColliderBuilder::cylinder(2.6e-3, 3.4e-3),
+                Vector::new(if periodic[0] { 0.9e-3 } else { 18.2e-3 }, 12.4e-3, 13.6e-3),
+                rotation.inverse(),
+            ),
+            (
+                ColliderBuilder::ball(3.7e-3),
+                Vector::new(if periodic[0] { 89.5e-3 } else { 17.5e-3 }, 3.6e-3, 5.5e-3),
+                Rotation::IDENTITY,
+            ),
         ];
         let (mut shapes, mut handles) = (Vec::new(), Vec::new());
         for (k, (builder, at, rot)) in bodies.into_iter().enumerate() {
-            let (v, w) = (Vector::new(0.01, -0.02, 0.015) * (k + 1) as Real, Vector::new(3.0, -1.0, 2.0) * (k as Real - 1.0));
-            let body = world.insert_body(RigidBodyBuilder::dynamic().translation(at).rotation(rot.to_scaled_axis()).linvel(v).angvel(w));
+            let (v, w) = (
+                Vector::new(0.01, -0.02, 0.015) * (k + 1) as Real,
+                Vector::new(3.0, -1.0, 2.0) * (k as Real - 1.0),
+            );
+            let body = world.insert_body(
+                RigidBodyBuilder::dynamic()
+                    .translation(at)
+                    .rotation(rot.to_scaled_axis())
+                    .linvel(v)
+                    .angvel(w),
+            );
             let collider = world.insert_collider(builder.density(2000.0), Some(body));
             fluid.couple(&world, collider).unwrap();
-            shapes.push((ConvexShape::from_parry(world.colliders[collider].shape()).unwrap(), *world.colliders[collider].position()));
+            shapes.push((
+                ConvexShape::from_parry(world.colliders[collider].shape()).unwrap(),
+                *world.colliders[collider].position(),
+            ));
             handles.push(body);
         }
         // Each body's motion when it is mapped (the step then moves it), in coupling order.
-        let motions: Vec<(Vector, Vector, Vector)> = handles.iter().map(|&h| (world.bodies[h].center_of_mass(), world.bodies[h].linvel(), world.bodies[h].angvel())).collect();
+        let motions: Vec<(Vector, Vector, Vector)> = handles
+            .iter()
+            .map(|&h| {
+                (
+                    world.bodies[h].center_of_mass(),
+                    world.bodies[h].linvel(),
+                    world.bodies[h].angvel(),
+                )
+            })
+            .collect();
         let to_lattice = fluid.units().velocity_to_lattice(1.0);
         fluid.step(&mut world, None).unwrap();
         let lattice = fluid.lattice();
@@ -172,21 +231,43 @@ fn the_mapped_field_is_every_nodes_solid_fraction() {
         for z in 0..nz {
             for y in 0..ny {
                 let row = lattice.particles.row(z * ny + y);
-                assert!(row.windows(2).all(|w| w[0].x < w[1].x), "row ({y}, {z}) not sorted by x, or a node twice");
+                assert!(
+                    row.windows(2).all(|w| w[0].x < w[1].x),
+                    "row ({y}, {z}) not sorted by x, or a node twice"
+                );
                 nodes += row.len();
                 for x in 0..nx {
                     let p = fluid.origin() + Vector::new(x as Real, y as Real, z as Real) * dx;
                     // Every body at every periodic image; at most one reaches a node here.
                     let mut expected = None;
                     for (id, (shape, pose)) in shapes.iter().enumerate() {
-                        let images = |d: usize| if periodic[d] { vec![-1.0, 0.0, 1.0, 3.0] } else { vec![0.0] };
-                        for shift in images(0).into_iter().flat_map(|sx| images(1).into_iter().map(move |sy| Vector::new(sx, sy, 0.0) * lengths)) {
-                            let d_b = solid_fraction(shape.distance(pose.inverse() * (p + shift)), 1.5 * dx);
+                        let images = |d: usize| {
+                            if periodic[d] {
+                                vec![-1.0, 0.0, 1.0, 3.0]
+                            } else {
+                                vec![0.0]
+                            }
+                        };
+                        for shift in images(0).into_iter().flat_map(|sx| {
+                            images(1).into_iter().map(move |sy| Vector::new(sx, sy, 0.0) * lengths)
+                        }) {
+                            let d_b = solid_fraction(
+                                shape.distance(pose.inverse() * (p + shift)),
+                                1.5 * dx,
+                            );
                             if d_b > 0.0 && !lattice.is_solid(lattice.index(x, y, z)) {
-                                assert!(expected.is_none(), "two bodies reach node ({x}, {y}, {z})");
+                                assert!(
+                                    expected.is_none(),
+                                    "two bodies reach node ({x}, {y}, {z})"
+                                );
                                 let (com, v, w) = motions[id];
                                 let arm = (p + shift - com) / dx;
-                                expected = Some((id as u32, d_b, arm, (v + w.cross(arm * dx)) * to_lattice));
+                                expected = Some((
+                                    id as u32,
+                                    d_b,
+                                    arm,
+                                    (v + w.cross(arm * dx)) * to_lattice,
+                                ));
                             }
                         }
                     }
@@ -196,14 +277,28 @@ fn the_mapped_field_is_every_nodes_solid_fraction() {
                     });
                     match (mapped, expected) {
                         (None, None) => {}
-                        (Some((id, got, arm, velocity)), Some((want_id, want, want_arm, want_velocity))) => {
+                        (
+                            Some((id, got, arm, velocity)),
+                            Some((want_id, want, want_arm, want_velocity)),
+                        ) => {
                             assert_eq!(id, want_id, "node ({x}, {y}, {z})");
-                            assert!((got - want).abs() < 1e-9, "node ({x}, {y}, {z}): d_B {got} vs {want}");
-                            assert!((arm - want_arm).length() < 1e-9, "node ({x}, {y}, {z}): lever arm {arm} vs {want_arm}");
-                            assert!((velocity - want_velocity).length() < 1e-12, "node ({x}, {y}, {z}): velocity {velocity} vs {want_velocity}");
+                            assert!(
+                                (got - want).abs() < 1e-9,
+                                "node ({x}, {y}, {z}): d_B {got} vs {want}"
+                            );
+                            assert!(
+                                (arm - want_arm).length() < 1e-9,
+                                "node ({x}, {y}, {z}): lever arm {arm} vs {want_arm}"
+                            );
+                            assert!(
+                                (velocity - want_velocity).length() < 1e-12,
+                                "node ({x}, {y}, {z}): velocity {velocity} vs {want_velocity}"
+                            );
                             checked += 1;
                         }
-                        _ => panic!("node ({x}, {y}, {z}): mapped {mapped:?}, expected {expected:?}"),
+                        _ => {
+                            panic!("node ({x}, {y}, {z}): mapped {mapped:?}, expected {expected:?}")
+                        }
                     }
                 }
             }

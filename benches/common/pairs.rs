@@ -56,7 +56,12 @@ pub fn pairs() -> Vec<(&'static str, ConvexShape, Pose, ConvexShape, Pose)> {
         ),
         (
             "capsule_cylinder",
-            ConvexShape::capsule(Vector::new(-0.004, 0.0, 0.0), Vector::new(0.004, 0.0, 0.0), 0.002).unwrap(),
+            ConvexShape::capsule(
+                Vector::new(-0.004, 0.0, 0.0),
+                Vector::new(0.004, 0.0, 0.0),
+                0.002,
+            )
+            .unwrap(),
             Pose::from_parts(Vector::new(0.0, 0.0058, 0.0), Rotation::from_rotation_y(0.5)),
             ConvexShape::cylinder(0.004, 0.004).unwrap(),
             Pose::IDENTITY,

@@ -39,7 +39,10 @@ pub struct Checkpoints {
 impl Checkpoints {
     /// From the command line, files under `out/checkpoints` (created when saving is asked for).
     pub fn from_args(args: &Args, out: &Path) -> Self {
-        let every = args.value("--checkpoint-every").map(|_| args.number("--checkpoint-every", 0.0) as u64).filter(|&n| n > 0);
+        let every = args
+            .value("--checkpoint-every")
+            .map(|_| args.number("--checkpoint-every", 0.0) as u64)
+            .filter(|&n| n > 0);
         let dir = out.join("checkpoints");
         if every.is_some() {
             fs::create_dir_all(&dir).expect("create target/validation/checkpoints");
@@ -80,17 +83,21 @@ pub fn time_us(min_ms: f64, mut f: impl FnMut()) -> f64 {
 /// Registers DejaVu Sans as plotters' "sans-serif" (no system fonts needed).
 pub fn register_fonts() {
     use plotters::style::FontStyle;
-    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    let _ =
+        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
 }
 
 /// Least-squares slope of `ln(err)` against `ln(n)`, negated: the experimental order of
 /// convergence.
 pub fn eoc(n: &[f64], err: &[f64]) -> f64 {
-    let pts: Vec<(f64, f64)> = n.iter().zip(err).filter(|(_, e)| **e > 0.0).map(|(n, e)| (n.ln(), e.ln())).collect();
+    let pts: Vec<(f64, f64)> =
+        n.iter().zip(err).filter(|(_, e)| **e > 0.0).map(|(n, e)| (n.ln(), e.ln())).collect();
     let m = pts.len() as f64;
     let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
     let (mx, my) = (sx / m, sy / m);
-    let (num, den) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + (p.0 - mx) * (p.1 - my), a.1 + (p.0 - mx).powi(2)));
+    let (num, den) = pts
+        .iter()
+        .fold((0.0, 0.0), |a, p| (a.0 + (p.0 - mx) * (p.1 - my), a.1 + (p.0 - mx).powi(2)));
     -num / den
 }
 
@@ -104,14 +111,20 @@ impl Args {
     /// name is refused (exit 2) rather than ignored — a mistyped option would otherwise start
     /// the default run, which can take an hour.
     pub fn from_env(source: &str) -> Self {
-        let usage: String = source.lines().map_while(|l| l.strip_prefix("//!")).map(|l| format!("{}\n", l.strip_prefix(' ').unwrap_or(l))).collect();
+        let usage: String = source
+            .lines()
+            .map_while(|l| l.strip_prefix("//!"))
+            .map(|l| format!("{}\n", l.strip_prefix(' ').unwrap_or(l)))
+            .collect();
         let args: Vec<String> = std::env::args().collect();
         if args.iter().skip(1).any(|a| a == "--help" || a == "-h") {
             print!("{usage}");
             std::process::exit(0);
         }
         let known = |a: &str| {
-            usage.match_indices(a).any(|(i, _)| !usage[i + a.len()..].starts_with(|c: char| c.is_ascii_alphanumeric() || c == '-'))
+            usage.match_indices(a).any(|(i, _)| {
+                !usage[i + a.len()..].starts_with(|c: char| c.is_ascii_alphanumeric() || c == '-')
+            })
         };
         if let Some(bad) = args.iter().skip(1).find(|a| a.starts_with("--") && !known(a)) {
             eprintln!("unknown option {bad}; the options are (--help prints this):\n\n{usage}");
@@ -130,12 +143,22 @@ impl Args {
     }
     /// The number after `name` (a clear panic when it is not one), or `default`.
     pub fn number(&self, name: &str, default: f64) -> f64 {
-        self.value(name).map(|v| v.parse().unwrap_or_else(|_| panic!("{name}: not a number: {v}"))).unwrap_or(default)
+        self.value(name)
+            .map(|v| v.parse().unwrap_or_else(|_| panic!("{name}: not a number: {v}")))
+            .unwrap_or(default)
     }
     /// The comma-separated numbers after `name`, or `default`.
     pub fn list(&self, name: &str, default: &[f64]) -> Vec<f64> {
         self.value(name)
-            .map(|v| v.split(',').map(|x| x.trim().parse().unwrap_or_else(|_| panic!("{name}: not a number list: {v}"))).collect())
+            .map(|v| {
+                v.split(',')
+                    .map(|x| {
+                        x.trim()
+                            .parse()
+                            .unwrap_or_else(|_| panic!("{name}: not a number list: {v}"))
+                    })
+                    .collect()
+            })
             .unwrap_or_else(|| default.to_vec())
     }
 }

@@ -48,14 +48,18 @@ fn bandwidth(threads: usize) -> Bandwidth {
         let rate = |bytes: f64, t: Instant| bytes * n as f64 / t.elapsed().as_secs_f64() / 1e9;
         for _ in 0..RUNS {
             let t = Instant::now();
-            a.par_chunks_mut(chunk).zip(b.par_chunks(chunk)).for_each(|(a, b)| a.copy_from_slice(b));
+            a.par_chunks_mut(chunk)
+                .zip(b.par_chunks(chunk))
+                .for_each(|(a, b)| a.copy_from_slice(b));
             copies.push(rate(16.0, t));
             let t = Instant::now();
-            a.par_chunks_mut(chunk).zip(b.par_chunks(chunk).zip(c.par_chunks(chunk))).for_each(|(a, (b, c))| {
-                for i in 0..a.len() {
-                    a[i] = b[i] + 3.0 * c[i];
-                }
-            });
+            a.par_chunks_mut(chunk).zip(b.par_chunks(chunk).zip(c.par_chunks(chunk))).for_each(
+                |(a, (b, c))| {
+                    for i in 0..a.len() {
+                        a[i] = b[i] + 3.0 * c[i];
+                    }
+                },
+            );
             triads.push(rate(24.0, t));
             let t = Instant::now();
             a.par_chunks_mut(chunk).zip(b.par_chunks(chunk)).for_each(|(a, b)| {
@@ -70,7 +74,11 @@ fn bandwidth(threads: usize) -> Bandwidth {
             v.sort_by(f64::total_cmp);
             v[RUNS / 2]
         };
-        Bandwidth { copy: median(&mut copies), triad: median(&mut triads), update: median(&mut updates) }
+        Bandwidth {
+            copy: median(&mut copies),
+            triad: median(&mut triads),
+            update: median(&mut updates),
+        }
     })
 }
 
@@ -90,7 +98,9 @@ fn add_particles(lat: &mut Lattice, fraction: f64, shift: f64) -> usize {
         while y < ny as f64 {
             let mut x = spacing / 2.0;
             while x < nx as f64 {
-                lat.particles.add_sphere([x + shift, y, z], r, 1.0, [1e-3, 0.0, 0.0], id).expect("a sphere inside the lattice");
+                lat.particles
+                    .add_sphere([x + shift, y, z], r, 1.0, [1e-3, 0.0, 0.0], id)
+                    .expect("a sphere inside the lattice");
                 id += 1;
                 x += spacing;
             }
@@ -104,12 +114,23 @@ fn add_particles(lat: &mut Lattice, fraction: f64, shift: f64) -> usize {
 /// MLUPs of `n³` with `threads` threads, timed over at least 1.5 s. `moving`: the spheres are
 /// mapped again before every step, half a cell back and forth along x, so the rows' nodes
 /// change and the links are found again (the mapping itself not timed).
-fn mlups(n: usize, threads: usize, particles: bool, moving: bool, method: ForceMethod, storage: Storage) -> (f64, f64) {
+fn mlups(
+    n: usize,
+    threads: usize,
+    particles: bool,
+    moving: bool,
+    method: ForceMethod,
+    storage: Storage,
+) -> (f64, f64) {
     pool(threads).install(|| {
         let mut lat = Lattice::new(n, n, n, 0.6).expect("lattice");
         lat.set_storage(storage);
         lat.set_force_method(method);
-        let covered = if particles { add_particles(&mut lat, 0.2, 0.0) as f64 / lat.cells() as f64 } else { 0.0 };
+        let covered = if particles {
+            add_particles(&mut lat, 0.2, 0.0) as f64 / lat.cells() as f64
+        } else {
+            0.0
+        };
         lat.run(4).expect("warm-up");
         let mut timed = 0.0;
         let mut steps = 0;
@@ -132,21 +153,35 @@ fn main() {
     let (mut roof, mut triad) = (0.0f64, 0.0f64);
     for t in 1..=threads_max {
         let bw = bandwidth(t);
-        println!("  {t} thread(s): copy {:.1} GB/s, triad {:.1} GB/s, in-place update {:.1} GB/s", bw.copy, bw.triad, bw.update);
+        println!(
+            "  {t} thread(s): copy {:.1} GB/s, triad {:.1} GB/s, in-place update {:.1} GB/s",
+            bw.copy, bw.triad, bw.update
+        );
         roof = roof.max(bw.update);
         triad = triad.max(bw.triad);
     }
     let roofline = roof * 1e9 / BYTES_PER_UPDATE / 1e6;
     println!("Roofline: {roof:.1} GB/s (in-place update) / {BYTES_PER_UPDATE} B per node update = {roofline:.1} MLUPs (f64)");
     println!("  (from the triad, which also pays a write-allocate the A-A sweep does not: {:.1} MLUPs)\n", triad * 1e9 / BYTES_PER_UPDATE / 1e6);
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("target").join("validation");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("target")
+        .join("validation");
     std::fs::create_dir_all(&dir).expect("output folder");
     // f64 populations (the default, `lbm_throughput.csv`), then f32 storage at half the bytes
     // per update (`lbm_throughput_f32.csv`, same columns).
-    for (storage, bytes, file) in [(Storage::F64, BYTES_PER_UPDATE, "lbm_throughput.csv"), (Storage::F32, BYTES_PER_UPDATE / 2.0, "lbm_throughput_f32.csv")] {
+    for (storage, bytes, file) in [
+        (Storage::F64, BYTES_PER_UPDATE, "lbm_throughput.csv"),
+        (Storage::F32, BYTES_PER_UPDATE / 2.0, "lbm_throughput_f32.csv"),
+    ] {
         let roofline = roof * 1e9 / bytes / 1e6;
-        println!("{storage:?} populations: roofline {roofline:.1} MLUPs ({bytes} B per node update)");
-        println!("{:>6} {:>8} {:>10} {:>9} {:>8} {:>10}", "grid", "threads", "particles", "covered", "MLUPs", "% roofline");
+        println!(
+            "{storage:?} populations: roofline {roofline:.1} MLUPs ({bytes} B per node update)"
+        );
+        println!(
+            "{:>6} {:>8} {:>10} {:>9} {:>8} {:>10}",
+            "grid", "threads", "particles", "covered", "MLUPs", "% roofline"
+        );
         let mut rows = Vec::new();
         for n in [64, 128] {
             for t in 1..=threads_max {
@@ -161,9 +196,17 @@ fn main() {
                 ];
                 for (name, particles, moving, method) in cases {
                     let (m, covered) = mlups(n, t, particles, moving, method, storage);
-                    println!("{:>5}³ {t:>8} {name:>10} {:>8.1}% {m:>8.1} {:>9.0}%", n, covered * 100.0, 100.0 * m / roofline);
+                    println!(
+                        "{:>5}³ {t:>8} {name:>10} {:>8.1}% {m:>8.1} {:>9.0}%",
+                        n,
+                        covered * 100.0,
+                        100.0 * m / roofline
+                    );
                     if name == "no" || name == "exchange" {
-                        rows.push(format!("{n}^3,{t},{},{m:.2},{roofline:.2}", if particles { 0.2 } else { 0.0 }));
+                        rows.push(format!(
+                            "{n}^3,{t},{},{m:.2},{roofline:.2}",
+                            if particles { 0.2 } else { 0.0 }
+                        ));
                     }
                 }
             }

@@ -54,5 +54,6 @@ pub fn garside_al_dibouni_exponent(re: f64) -> f64 {
 /// A sphere alone in a triply periodic cubic box is such an array: it settles at `U_stokes/K`.
 pub fn cubic_array_drag_factor(phi: f64) -> f64 {
     let s = phi.cbrt();
-    1.0 / (1.0 - 1.7601 * s + phi - 1.5593 * phi * phi + 3.9799 * phi.powf(8.0 / 3.0) - 3.0734 * phi.powf(10.0 / 3.0))
+    1.0 / (1.0 - 1.7601 * s + phi - 1.5593 * phi * phi + 3.9799 * phi.powf(8.0 / 3.0)
+        - 3.0734 * phi.powf(10.0 / 3.0))
 }

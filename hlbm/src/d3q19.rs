@@ -65,7 +65,25 @@ pub fn moments(f: &[[f64; LANES]; Q]) -> ([f64; LANES], [[f64; LANES]; 3]) {
     for l in 0..LANES {
         // Written out: the compiler keeps all of it in registers and vectorises over `l`.
         let f = |i: usize| f[i][l];
-        rho[l] = f(0) + f(1) + f(2) + f(3) + f(4) + f(5) + f(6) + f(7) + f(8) + f(9) + f(10) + f(11) + f(12) + f(13) + f(14) + f(15) + f(16) + f(17) + f(18);
+        rho[l] = f(0)
+            + f(1)
+            + f(2)
+            + f(3)
+            + f(4)
+            + f(5)
+            + f(6)
+            + f(7)
+            + f(8)
+            + f(9)
+            + f(10)
+            + f(11)
+            + f(12)
+            + f(13)
+            + f(14)
+            + f(15)
+            + f(16)
+            + f(17)
+            + f(18);
         j[0][l] = f(1) - f(10) + f(4) - f(13) + f(5) - f(14) + f(6) - f(15) + f(7) - f(16);
         j[1][l] = f(2) - f(11) + f(4) - f(13) - f(5) + f(14) + f(8) - f(17) + f(9) - f(18);
         j[2][l] = f(3) - f(12) + f(6) - f(15) - f(7) + f(16) + f(8) - f(17) - f(9) + f(18);
@@ -105,7 +123,11 @@ pub(crate) use for_each_pair;
 /// and differs in the sign of the odd part `3 w ρ c·u`, which halves the arithmetic. Lanes are
 /// innermost, so every statement is one vector operation over the block.
 #[inline(always)]
-pub fn collide(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES]; 3]>) -> ([f64; LANES], [[f64; LANES]; 3]) {
+pub fn collide(
+    f: &mut [[f64; LANES]; Q],
+    omega: f64,
+    du: Option<&[[f64; LANES]; 3]>,
+) -> ([f64; LANES], [[f64; LANES]; 3]) {
     let (rho, u) = moments(f);
     collide_at(f, omega, du, rho, u)
 }
@@ -114,7 +136,13 @@ pub fn collide(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES];
 /// nodes needs `u` for its forcing term first).
 #[inline(always)]
 #[allow(clippy::neg_multiply)] // the velocity components are `for_each_pair!`'s constants, ±1
-pub fn collide_at(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANES]; 3]>, rho: [f64; LANES], u: [[f64; LANES]; 3]) -> ([f64; LANES], [[f64; LANES]; 3]) {
+pub fn collide_at(
+    f: &mut [[f64; LANES]; Q],
+    omega: f64,
+    du: Option<&[[f64; LANES]; 3]>,
+    rho: [f64; LANES],
+    u: [[f64; LANES]; 3],
+) -> ([f64; LANES], [[f64; LANES]; 3]) {
     let mut usq = [0.0; LANES];
     for l in 0..LANES {
         usq[l] = 1.5 * (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]);
@@ -151,7 +179,8 @@ pub fn collide_at(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANE
             // f + ω (feq(u) - f) + feq(u+Δu) - feq(u) = f (1-ω) + (ω-1) feq(u) + feq(u+Δu)
             let a = omega - 1.0;
             for l in 0..LANES {
-                f[0][l] = f[0][l] * (1.0 - omega) + rho[l] / 3.0 * (a * (1.0 - usq[l]) + (1.0 - ssq[l]));
+                f[0][l] =
+                    f[0][l] * (1.0 - omega) + rho[l] / 3.0 * (a * (1.0 - usq[l]) + (1.0 - ssq[l]));
             }
             macro_rules! pair {
                 ($i:expr, $j:expr, $cx:expr, $cy:expr, $cz:expr, $w:expr) => {
@@ -159,7 +188,8 @@ pub fn collide_at(f: &mut [[f64; LANES]; Q], omega: f64, du: Option<&[[f64; LANE
                         let cu = $cx * u[0][l] + $cy * u[1][l] + $cz * u[2][l];
                         let cs = $cx * s[0][l] + $cy * s[1][l] + $cz * s[2][l];
                         let wr = $w * rho[l];
-                        let even = wr * (a * (1.0 - usq[l] + 4.5 * cu * cu) + (1.0 - ssq[l] + 4.5 * cs * cs));
+                        let even = wr
+                            * (a * (1.0 - usq[l] + 4.5 * cu * cu) + (1.0 - ssq[l] + 4.5 * cs * cs));
                         let odd = 3.0 * wr * (a * cu + cs);
                         f[$i][l] = f[$i][l] * (1.0 - omega) + even + odd;
                         f[$j][l] = f[$j][l] * (1.0 - omega) + even - odd;

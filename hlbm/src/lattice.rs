@@ -252,12 +252,22 @@ impl Lines {
     fn as_slice<T: Pop>(&self) -> &[T] {
         // SAFETY: `Line` is `repr(C)` over 64 bytes with no padding, aligned to 64; f64 and f32
         // have no invalid bit patterns.
-        unsafe { std::slice::from_raw_parts(self.0.as_ptr().cast(), self.0.len() * 64 / std::mem::size_of::<T>()) }
+        unsafe {
+            std::slice::from_raw_parts(
+                self.0.as_ptr().cast(),
+                self.0.len() * 64 / std::mem::size_of::<T>(),
+            )
+        }
     }
 
     fn as_mut_slice<T: Pop>(&mut self) -> &mut [T] {
         // SAFETY: as in `as_slice`.
-        unsafe { std::slice::from_raw_parts_mut(self.0.as_mut_ptr().cast(), self.0.len() * 64 / std::mem::size_of::<T>()) }
+        unsafe {
+            std::slice::from_raw_parts_mut(
+                self.0.as_mut_ptr().cast(),
+                self.0.len() * 64 / std::mem::size_of::<T>(),
+            )
+        }
     }
 }
 
@@ -328,11 +338,19 @@ impl Lattice {
     /// A periodic `nx × ny × nz` lattice at rest with density 1 and relaxation time `tau > 0.5`.
     pub fn new(nx: usize, ny: usize, nz: usize, tau: f64) -> Result<Self> {
         if !(tau > 0.5 && tau.is_finite()) {
-            return Err(Error::InvalidParameter { name: "tau", value: tau, allowed: "tau > 0.5 (finite)" });
+            return Err(Error::InvalidParameter {
+                name: "tau",
+                value: tau,
+                allowed: "tau > 0.5 (finite)",
+            });
         }
         for (name, v) in [("nx", nx), ("ny", ny), ("nz", nz)] {
             if v == 0 || v > 1 << 20 {
-                return Err(Error::InvalidParameter { name, value: v as f64, allowed: "1 <= n <= 2^20" });
+                return Err(Error::InvalidParameter {
+                    name,
+                    value: v as f64,
+                    allowed: "1 <= n <= 2^20",
+                });
             }
         }
         let n = nx * ny * nz;
@@ -419,7 +437,11 @@ impl Lattice {
     /// [`Lattice::set_solid`].
     pub fn add_wall(&mut self, velocity: [f64; 3]) -> Result<NodeKind> {
         if self.wall_velocity.len() > 254 {
-            return Err(Error::InvalidParameter { name: "walls", value: 255.0, allowed: "at most 254 walls" });
+            return Err(Error::InvalidParameter {
+                name: "walls",
+                value: 255.0,
+                allowed: "at most 254 walls",
+            });
         }
         self.wall_velocity.push(velocity);
         Ok((self.wall_velocity.len() - 1) as NodeKind)
@@ -442,7 +464,11 @@ impl Lattice {
         for dz in -1..=1i64 {
             for dy in -1..=1i64 {
                 for dx in -1..=1i64 {
-                    let (xx, yy, zz) = ((x as i64 + dx).rem_euclid(nx), (y as i64 + dy).rem_euclid(ny), (z as i64 + dz).rem_euclid(nz));
+                    let (xx, yy, zz) = (
+                        (x as i64 + dx).rem_euclid(nx),
+                        (y as i64 + dy).rem_euclid(ny),
+                        (z as i64 + dz).rem_euclid(nz),
+                    );
                     self.slow_block[(zz * ny + yy) as usize * blocks + xx as usize / LANES] = true;
                 }
             }
@@ -473,7 +499,10 @@ impl Lattice {
         for z in 0..nz {
             for y in 0..ny {
                 for x in 0..nx {
-                    let edge = [(x, nx), (y, ny), (z, nz)].iter().zip(periodic).any(|(&(v, n), p)| !p && (v == 0 || v == n - 1));
+                    let edge = [(x, nx), (y, ny), (z, nz)]
+                        .iter()
+                        .zip(periodic)
+                        .any(|(&(v, n), p)| !p && (v == 0 || v == n - 1));
                     if edge && self.kind[self.index(x, y, z)] == 0 {
                         return Err(Error::OpenBoundary { x, y, z });
                     }
@@ -516,7 +545,8 @@ impl Lattice {
 
     /// Asks the next sweeps to store density and velocity (read them with [`Lattice::macroscopic`]).
     pub fn store_macroscopic(&mut self, on: bool) {
-        self.macros = on.then(|| Macroscopic { rho: vec![1.0; self.cells()], u: vec![[0.0; 3]; self.cells()] });
+        self.macros = on
+            .then(|| Macroscopic { rho: vec![1.0; self.cells()], u: vec![[0.0; 3]; self.cells()] });
     }
 
     /// Density and velocity of the last sweep, if stored.
@@ -537,7 +567,8 @@ impl Lattice {
             for i in 0..Q {
                 let src = self.neighbour(x, y, z, C[i], -1);
                 out[i] = if self.kind[src] != 0 {
-                    self.get(i * n + c, i) + 6.0 * W[i] * dot(C[i], self.wall_velocity[self.kind[src] as usize])
+                    self.get(i * n + c, i)
+                        + 6.0 * W[i] * dot(C[i], self.wall_velocity[self.kind[src] as usize])
                 } else {
                     self.get(OPP[i] * n + src, i)
                 };
@@ -697,7 +728,10 @@ impl Lattice {
             }
             max_u2 = max_u2.max(s.max_u2);
             for (body, pf) in s.forces {
-                let e = report.particle_forces.entry(self.particles.bodies()[body as usize].id).or_default();
+                let e = report
+                    .particle_forces
+                    .entry(self.particles.bodies()[body as usize].id)
+                    .or_default();
                 for d in 0..3 {
                     e.force[d] += pf.force[d];
                     e.moment[d] += pf.moment[d];
@@ -759,30 +793,39 @@ impl Lattice {
         set.resize(rows, Vec::new());
         changed.resize(rows, false);
         let particles = &self.particles;
-        owner.par_chunks_mut(nx * ny).zip(set.par_chunks_mut(ny)).zip(changed.par_chunks_mut(ny)).enumerate().for_each(|(z, ((slab, rows), changed))| {
-            for (y, (row, changed)) in rows.iter_mut().zip(changed.iter_mut()).enumerate() {
-                let nodes = particles.row(z * ny + y);
-                *changed = nodes.len() != row.len() || nodes.iter().zip(row.iter()).any(|(n, &(x, body))| n.x != x || n.body() as u32 != body);
-                if !*changed {
-                    continue;
-                }
-                // A wall node stays a wall (a particle covering one is the caller's error).
-                for &(x, _) in row.iter() {
-                    let o = &mut slab[y * nx + x as usize];
-                    if *o != WALL_OWNER {
-                        *o = 0;
+        owner
+            .par_chunks_mut(nx * ny)
+            .zip(set.par_chunks_mut(ny))
+            .zip(changed.par_chunks_mut(ny))
+            .enumerate()
+            .for_each(|(z, ((slab, rows), changed))| {
+                for (y, (row, changed)) in rows.iter_mut().zip(changed.iter_mut()).enumerate() {
+                    let nodes = particles.row(z * ny + y);
+                    *changed = nodes.len() != row.len()
+                        || nodes
+                            .iter()
+                            .zip(row.iter())
+                            .any(|(n, &(x, body))| n.x != x || n.body() as u32 != body);
+                    if !*changed {
+                        continue;
+                    }
+                    // A wall node stays a wall (a particle covering one is the caller's error).
+                    for &(x, _) in row.iter() {
+                        let o = &mut slab[y * nx + x as usize];
+                        if *o != WALL_OWNER {
+                            *o = 0;
+                        }
+                    }
+                    row.clear();
+                    for n in nodes {
+                        let o = &mut slab[y * nx + n.x as usize];
+                        if *o != WALL_OWNER {
+                            *o = n.body() as u32 + 1;
+                        }
+                        row.push((n.x, n.body() as u32));
                     }
                 }
-                row.clear();
-                for n in nodes {
-                    let o = &mut slab[y * nx + n.x as usize];
-                    if *o != WALL_OWNER {
-                        *o = n.body() as u32 + 1;
-                    }
-                    row.push((n.x, n.body() as u32));
-                }
-            }
-        });
+            });
         let mut links = std::mem::take(&mut self.links);
         links.resize(rows, Vec::new());
         // The rows' node positions from the compact list just built (the particle nodes
@@ -791,7 +834,9 @@ impl Lattice {
         links.par_chunks_mut(ny).enumerate().for_each(|(z, slab)| {
             let mut span = vec![0u32; nx];
             for (y, masks) in slab.iter_mut().enumerate() {
-                let near = |dy: i64, dz: i64| changed_ref[wrap_step(z, dz, nz) * ny + wrap_step(y, dy, ny)];
+                let near = |dy: i64, dz: i64| {
+                    changed_ref[wrap_step(z, dz, nz) * ny + wrap_step(y, dy, ny)]
+                };
                 if !(-1..=1).any(|dz| (-1..=1).any(|dy| near(dy, dz))) {
                     continue;
                 }
@@ -819,7 +864,15 @@ impl Lattice {
     /// # Safety
     /// As [`Lattice::sweep_row_generic`].
     #[inline]
-    unsafe fn sweep_row<T: Pop>(&self, ptr: Ptr<T>, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+    unsafe fn sweep_row<T: Pop>(
+        &self,
+        ptr: Ptr<T>,
+        macros: Option<MacroPtr>,
+        odd: bool,
+        y: usize,
+        z: usize,
+        res: &mut SlabResult,
+    ) {
         #[cfg(target_arch = "x86_64")]
         {
             match simd_level() {
@@ -834,14 +887,30 @@ impl Lattice {
     /// [`Lattice::sweep_row_generic`] compiled for AVX-512.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx2,fma")]
-    unsafe fn sweep_row_avx512<T: Pop>(&self, ptr: Ptr<T>, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+    unsafe fn sweep_row_avx512<T: Pop>(
+        &self,
+        ptr: Ptr<T>,
+        macros: Option<MacroPtr>,
+        odd: bool,
+        y: usize,
+        z: usize,
+        res: &mut SlabResult,
+    ) {
         self.sweep_row_generic(ptr, macros, odd, y, z, res)
     }
 
     /// [`Lattice::sweep_row_generic`] compiled for AVX2 + FMA.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn sweep_row_avx2<T: Pop>(&self, ptr: Ptr<T>, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+    unsafe fn sweep_row_avx2<T: Pop>(
+        &self,
+        ptr: Ptr<T>,
+        macros: Option<MacroPtr>,
+        odd: bool,
+        y: usize,
+        z: usize,
+        res: &mut SlabResult,
+    ) {
         self.sweep_row_generic(ptr, macros, odd, y, z, res)
     }
 
@@ -851,7 +920,15 @@ impl Lattice {
     /// `ptr` points at `self.f`, stored as `T` (the lattice's [`Storage`]); no other thread works
     /// on this row's cells.
     #[inline(always)]
-    unsafe fn sweep_row_generic<T: Pop>(&self, ptr: Ptr<T>, macros: Option<MacroPtr>, odd: bool, y: usize, z: usize, res: &mut SlabResult) {
+    unsafe fn sweep_row_generic<T: Pop>(
+        &self,
+        ptr: Ptr<T>,
+        macros: Option<MacroPtr>,
+        odd: bool,
+        y: usize,
+        z: usize,
+        res: &mut SlabResult,
+    ) {
         let (nx, ny, nz) = (self.nx, self.ny, self.nz);
         let n = self.stride;
         let row = z * ny + y;
@@ -890,12 +967,22 @@ impl Lattice {
         // neighbour's row `row` at x + dx — unless that neighbour is solid in an odd step
         // (halfway bounce-back): then the cell's own slot `own`, with the moving-wall term that
         // a pull adds and a push subtracts. One rule for gather and scatter.
-        let slot = |i: usize, x: usize, row: usize, dx: i64, stored: usize, own: usize, slow: bool| -> (usize, f64) {
+        let slot = |i: usize,
+                    x: usize,
+                    row: usize,
+                    dx: i64,
+                    stored: usize,
+                    own: usize,
+                    slow: bool|
+         -> (usize, f64) {
             let sx = wrap_step(x, dx, nx);
             // Only blocks next to a solid node (`slow`) can have one as neighbour.
             let k = if odd && slow { self.kind[row - stored * n + sx] } else { 0 };
             if k != 0 {
-                return (own * n + base + x, 6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]));
+                return (
+                    own * n + base + x,
+                    6.0 * W[i] * dot(C[i], self.wall_velocity[k as usize]),
+                );
             }
             (row + sx, 0.0)
         };
@@ -980,8 +1067,13 @@ impl Lattice {
                         blk[i] = T::load_block(f.add(rd_row[i] + lo as usize), i);
                     } else {
                         let mut tmp = [*f.add(rd_row[i]); LANES];
-                        let (lane, from, first) = if lo < 0 { (0, nx - 1, 1) } else { (LANES - 1, 0, 0) };
-                        std::ptr::copy_nonoverlapping(f.add(rd_row[i] + (lo + first as i64) as usize), tmp.as_mut_ptr().add(first), LANES - 1);
+                        let (lane, from, first) =
+                            if lo < 0 { (0, nx - 1, 1) } else { (LANES - 1, 0, 0) };
+                        std::ptr::copy_nonoverlapping(
+                            f.add(rd_row[i] + (lo + first as i64) as usize),
+                            tmp.as_mut_ptr().add(first),
+                            LANES - 1,
+                        );
                         tmp[lane] = *f.add(rd_row[i] + from);
                         blk[i] = T::load_block(tmp.as_ptr(), i);
                     }
@@ -1053,7 +1145,11 @@ impl Lattice {
             let mut blk_max = 0.0f64;
             let mut bad = false;
             for l in 0..LANES {
-                u2[l] = if live[l] { u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l] } else { 0.0 };
+                u2[l] = if live[l] {
+                    u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]
+                } else {
+                    0.0
+                };
                 bad |= !(u2[l] <= lim2);
                 blk_max = blk_max.max(u2[l]);
             }
@@ -1075,7 +1171,9 @@ impl Lattice {
                     let fp = if exchange {
                         // The exchange over the node's links, and the body force on the node
                         // (all of it: the forcing holds the node at `u_p`).
-                        [0, 1, 2].map(|d| b.exchange[d][l] + b.velocity[d][l] * b.crossing[l] + rho[l] * g[d])
+                        [0, 1, 2].map(|d| {
+                            b.exchange[d][l] + b.velocity[d][l] * b.crossing[l] + rho[l] * g[d]
+                        })
                     } else {
                         [0, 1, 2].map(|d| -rho[l] * (du[d][l] - g[d]))
                     };
@@ -1111,8 +1209,13 @@ impl Lattice {
                     } else {
                         let mut tmp = [T::put(0.0, i); LANES];
                         T::store_block(tmp.as_mut_ptr(), &blk[i], i);
-                        let (lane, to, first) = if lo < 0 { (0, nx - 1, 1) } else { (LANES - 1, 0, 0) };
-                        std::ptr::copy_nonoverlapping(tmp.as_ptr().add(first), f.add(wr_row[i] + (lo + first as i64) as usize), LANES - 1);
+                        let (lane, to, first) =
+                            if lo < 0 { (0, nx - 1, 1) } else { (LANES - 1, 0, 0) };
+                        std::ptr::copy_nonoverlapping(
+                            tmp.as_ptr().add(first),
+                            f.add(wr_row[i] + (lo + first as i64) as usize),
+                            LANES - 1,
+                        );
                         *f.add(wr_row[i] + to) = tmp[lane];
                     }
                 }
@@ -1135,15 +1238,39 @@ impl Lattice {
 /// Appends to `masks` the links of the particle nodes `nodes` (`x` and body index, sorted by
 /// `x`) of row `(y, z)`, read off the owner field; `span` is scratch of length `nx`. Compiled
 /// for the best instruction set this CPU has (the compares vectorise: measured 4 → 16 lanes).
-fn row_links(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
+fn row_links(
+    owner: &[u32],
+    nodes: &[(u32, u32)],
+    y: usize,
+    z: usize,
+    dims: [usize; 3],
+    span: &mut [u32],
+    masks: &mut Vec<u32>,
+) {
     #[cfg(target_arch = "x86_64")]
     {
         #[target_feature(enable = "avx512f,avx2")]
-        unsafe fn avx512(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
+        unsafe fn avx512(
+            owner: &[u32],
+            nodes: &[(u32, u32)],
+            y: usize,
+            z: usize,
+            dims: [usize; 3],
+            span: &mut [u32],
+            masks: &mut Vec<u32>,
+        ) {
             row_links_generic(owner, nodes, y, z, dims, span, masks)
         }
         #[target_feature(enable = "avx2")]
-        unsafe fn avx2(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
+        unsafe fn avx2(
+            owner: &[u32],
+            nodes: &[(u32, u32)],
+            y: usize,
+            z: usize,
+            dims: [usize; 3],
+            span: &mut [u32],
+            masks: &mut Vec<u32>,
+        ) {
             row_links_generic(owner, nodes, y, z, dims, span, masks)
         }
         // SAFETY: the instruction sets were detected on this CPU.
@@ -1160,7 +1287,15 @@ fn row_links(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usi
 /// particle nodes, comparing contiguous owners (the first and last node of the row, whose
 /// links can wrap round the x face, one by one).
 #[inline(always)]
-fn row_links_generic(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, dims: [usize; 3], span: &mut [u32], masks: &mut Vec<u32>) {
+fn row_links_generic(
+    owner: &[u32],
+    nodes: &[(u32, u32)],
+    y: usize,
+    z: usize,
+    dims: [usize; 3],
+    span: &mut [u32],
+    masks: &mut Vec<u32>,
+) {
     let [nx, ny, nz] = dims;
     let (Some(&(first, _)), Some(&(last, _))) = (nodes.first(), nodes.last()) else { return };
     let own = (z * ny + y) * nx;
@@ -1173,7 +1308,9 @@ fn row_links_generic(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, di
         for &(dx, i) in dirs {
             let from = (base + lo) as i64 + dx;
             let theirs = &owner[from as usize..from as usize + (hi - lo)];
-            for ((m, &mine), &o) in span[lo..hi].iter_mut().zip(&owner[own + lo..own + hi]).zip(theirs) {
+            for ((m, &mine), &o) in
+                span[lo..hi].iter_mut().zip(&owner[own + lo..own + hi]).zip(theirs)
+            {
                 *m |= (((o != mine) & (o != WALL_OWNER)) as u32) << i;
             }
             for (e, x) in [0, nx - 1].into_iter().enumerate() {
@@ -1194,7 +1331,9 @@ fn row_links_generic(owner: &[u32], nodes: &[(u32, u32)], y: usize, z: usize, di
 /// The mass and momentum of all slabs, added in slab order (the same sum for any thread
 /// count).
 fn add_slabs(slabs: Vec<(f64, [f64; 3])>) -> (f64, [f64; 3]) {
-    slabs.into_iter().fold((0.0, [0.0; 3]), |(m, p), (ms, ps)| (m + ms, [p[0] + ps[0], p[1] + ps[1], p[2] + ps[2]]))
+    slabs.into_iter().fold((0.0, [0.0; 3]), |(m, p), (ms, ps)| {
+        (m + ms, [p[0] + ps[0], p[1] + ps[1], p[2] + ps[2]])
+    })
 }
 
 /// `v + d` wrapped into `0..n` for a step `|d| <= 1`: one compare, no integer division.
@@ -1282,7 +1421,12 @@ struct ParticleBlock {
 /// accumulated direction after direction, the four sums were chains of 18 and 10 dependent
 /// adds, each waiting on the last (+1–3 % on `lbm_profile` with the exchange).
 #[inline(always)]
-fn exchange_half<const INCOMING: bool>(blk: &[[f64; LANES]; Q], links: &[u32; LANES], crossing: &mut [f64; LANES], exchange: &mut [[f64; LANES]; 3]) {
+fn exchange_half<const INCOMING: bool>(
+    blk: &[[f64; LANES]; Q],
+    links: &[u32; LANES],
+    crossing: &mut [f64; LANES],
+    exchange: &mut [[f64; LANES]; 3],
+) {
     // Per moving direction i: the population crossing where i is a link, else 0; and (the
     // incoming half only, for both) 2 w_i where i is a link. One select per loop: so each
     // stays a masked vector move.
@@ -1314,8 +1458,10 @@ fn exchange_half<const INCOMING: bool>(blk: &[[f64; LANES]; Q], links: &[u32; LA
     for l in 0..LANES {
         let g = |i: usize| f[i][l] - w[i][l];
         let d = |k: usize| g(k) - g(k + 9);
-        let total = (((f[1][l] + f[10][l]) + (f[2][l] + f[11][l])) + ((f[3][l] + f[12][l]) + (f[4][l] + f[13][l])))
-            + (((f[5][l] + f[14][l]) + (f[6][l] + f[15][l])) + ((f[7][l] + f[16][l]) + (f[8][l] + f[17][l])))
+        let total = (((f[1][l] + f[10][l]) + (f[2][l] + f[11][l]))
+            + ((f[3][l] + f[12][l]) + (f[4][l] + f[13][l])))
+            + (((f[5][l] + f[14][l]) + (f[6][l] + f[15][l]))
+                + ((f[7][l] + f[16][l]) + (f[8][l] + f[17][l])))
             + (f[9][l] + f[18][l]);
         crossing[l] += if INCOMING { -total } else { total };
         exchange[0][l] -= ((d(1) + d(4)) + (d(5) + d(6))) + d(7);
@@ -1347,10 +1493,17 @@ pub fn simd_level() -> SimdLevel {
         let cap = std::env::var("HLBM_SIMD").unwrap_or_default();
         #[cfg(target_arch = "x86_64")]
         {
-            if cap != "baseline" && cap != "avx2" && std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("fma") {
+            if cap != "baseline"
+                && cap != "avx2"
+                && std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
                 return SimdLevel::Avx512;
             }
-            if cap != "baseline" && std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            if cap != "baseline"
+                && std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
                 return SimdLevel::Avx2;
             }
         }
@@ -1384,9 +1537,11 @@ mod tests {
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         for round in 0..50 {
-            let before: [[f64; LANES]; Q] = std::array::from_fn(|_| std::array::from_fn(|_| rand()));
+            let before: [[f64; LANES]; Q] =
+                std::array::from_fn(|_| std::array::from_fn(|_| rand()));
             let after: [[f64; LANES]; Q] = std::array::from_fn(|_| std::array::from_fn(|_| rand()));
-            let velocity: [[f64; 3]; LANES] = std::array::from_fn(|_| std::array::from_fn(|_| rand() - 0.5));
+            let velocity: [[f64; 3]; LANES] =
+                std::array::from_fn(|_| std::array::from_fn(|_| rand() - 0.5));
             let links: [u32; LANES] = std::array::from_fn(|l| match (round, l) {
                 (0, _) => 0,
                 (1, _) => (1 << Q) - 2,
@@ -1400,12 +1555,16 @@ mod tests {
                 for i in (1..Q).filter(|&i| links[l] >> i & 1 != 0) {
                     let (out, inc) = (after[i][l], before[OPP[i]][l]);
                     for d in 0..3 {
-                        expected[d] += velocity[l][d] * (out - inc) - C[i][d] as f64 * (out - W[i] + inc - W[i]);
+                        expected[d] += velocity[l][d] * (out - inc)
+                            - C[i][d] as f64 * (out - W[i] + inc - W[i]);
                     }
                 }
                 for d in 0..3 {
                     let got = exchange[d][l] + velocity[l][d] * crossing[l];
-                    assert!((got - expected[d]).abs() < 1e-12, "round {round} lane {l} axis {d}: {got} vs {expected:?}");
+                    assert!(
+                        (got - expected[d]).abs() < 1e-12,
+                        "round {round} lane {l} axis {d}: {got} vs {expected:?}"
+                    );
                 }
             }
         }
@@ -1430,8 +1589,12 @@ mod tests {
             for id in 0..4 {
                 lat.particles.add_body(id, [8.0, 6.0, 2.0], [0.0; 3], [0.0; 3]).unwrap();
             }
-            let mut add = |x: i64, y: i64, z: i64, body: usize| lat.particles.add(body, [x, y, z], 1.0).unwrap();
-            for (x, y, z) in (7..9).flat_map(|x| (5..7 + grow).flat_map(move |y| (1..3).map(move |z| (x, y, z)))) {
+            let mut add = |x: i64, y: i64, z: i64, body: usize| {
+                lat.particles.add(body, [x, y, z], 1.0).unwrap()
+            };
+            for (x, y, z) in
+                (7..9).flat_map(|x| (5..7 + grow).flat_map(move |y| (1..3).map(move |z| (x, y, z))))
+            {
                 add(x + dx, y, z, 0);
             }
             add(9, 5, 1, 1);
@@ -1440,7 +1603,17 @@ mod tests {
             add(15, 8, 2, 3);
         };
         let check = |lat: &Lattice| {
-            let owner = |c: usize| (0..lat.particles.rows()).flat_map(|r| lat.particles.row(r).iter().map(move |n| (r * lat.nx + n.x as usize, n.body()))).find(|&(at, _)| at == c).map(|(_, body)| body);
+            let owner = |c: usize| {
+                (0..lat.particles.rows())
+                    .flat_map(|r| {
+                        lat.particles
+                            .row(r)
+                            .iter()
+                            .map(move |n| (r * lat.nx + n.x as usize, n.body()))
+                    })
+                    .find(|&(at, _)| at == c)
+                    .map(|(_, body)| body)
+            };
             let mut links = 0;
             for (z, y) in (0..lat.nz).flat_map(|z| (0..lat.ny).map(move |y| (z, y))) {
                 let row = z * lat.ny + y;
@@ -1453,7 +1626,12 @@ mod tests {
                             expected |= 1 << i;
                         }
                     }
-                    assert_eq!(lat.links[row][k], expected, "node ({x}, {y}, {z}) of particle {}", n.body());
+                    assert_eq!(
+                        lat.links[row][k],
+                        expected,
+                        "node ({x}, {y}, {z}) of particle {}",
+                        n.body()
+                    );
                     links += expected.count_ones();
                 }
             }
@@ -1491,17 +1669,33 @@ mod tests {
         for storage in [Storage::F64, Storage::F32] {
             let mut lat = Lattice::new(12, 10, 8, 0.7).unwrap();
             lat.set_storage(storage);
-            lat.initialise(|x, y, z| (1.0 + 0.01 * (x as f64 * 0.7 + y as f64 * 0.3).sin(), [0.02 * (z as f64).cos(), -0.01, 0.03 * (y as f64 * 0.5).sin()]));
+            lat.initialise(|x, y, z| {
+                (
+                    1.0 + 0.01 * (x as f64 * 0.7 + y as f64 * 0.3).sin(),
+                    [0.02 * (z as f64).cos(), -0.01, 0.03 * (y as f64 * 0.5).sin()],
+                )
+            });
             lat.set_body_acceleration([1e-5, 2e-5, -3e-5]);
             for _ in 0..2 {
                 lat.step().unwrap();
                 let (m, p) = lat.totals_without_walls();
                 let (m0, p0) = lat.totals_by_node();
-                assert!((m - m0).abs() < 1e-10 * m0, "{storage:?}, step {}: mass {m} vs {m0}", lat.time());
+                assert!(
+                    (m - m0).abs() < 1e-10 * m0,
+                    "{storage:?}, step {}: mass {m} vs {m0}",
+                    lat.time()
+                );
                 for d in 0..3 {
-                    assert!((p[d] - p0[d]).abs() < 1e-10 * m0, "{storage:?}, step {}: momentum {p:?} vs {p0:?}", lat.time());
+                    assert!(
+                        (p[d] - p0[d]).abs() < 1e-10 * m0,
+                        "{storage:?}, step {}: momentum {p:?} vs {p0:?}",
+                        lat.time()
+                    );
                 }
-                assert!(p0.iter().all(|c| c.abs() > 1.0), "a flow with momentum on every axis: {p0:?}");
+                assert!(
+                    p0.iter().all(|c| c.abs() > 1.0),
+                    "a flow with momentum on every axis: {p0:?}"
+                );
             }
         }
     }

@@ -30,6 +30,9 @@ pub mod units;
 pub mod vtk;
 
 pub use error::{Error, Result};
-pub use lattice::{simd_level, ForceMethod, Lattice, Macroscopic, NodeKind, ParticleForce, SimdLevel, StepReport, Storage};
+pub use lattice::{
+    simd_level, ForceMethod, Lattice, Macroscopic, NodeKind, ParticleForce, SimdLevel, StepReport,
+    Storage,
+};
 pub use particles::{solid_fraction, ParticleBody, ParticleField, ParticleNode, SlabRows};
 pub use units::UnitConverter;

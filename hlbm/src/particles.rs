@@ -36,7 +36,8 @@ impl ParticleNode {
     #[inline]
     pub fn new(x: usize, body: usize, image: [i8; 3], d_b: f64) -> Self {
         debug_assert!(body < MAX_BODIES && image.iter().all(|i| (-1..=1).contains(i)));
-        let bits = image.iter().enumerate().fold(0u32, |acc, (d, &i)| acc | (((i + 1) as u32) << (2 * d)));
+        let bits =
+            image.iter().enumerate().fold(0u32, |acc, (d, &i)| acc | (((i + 1) as u32) << (2 * d)));
         Self { x: x as u32, body: body as u32 | bits << BODY_BITS, d_b }
     }
 
@@ -73,7 +74,11 @@ impl ParticleBody {
     #[inline(always)]
     pub fn velocity_at(&self, arm: [f64; 3]) -> [f64; 3] {
         let (w, v) = (self.spin, self.velocity);
-        [v[0] + w[1] * arm[2] - w[2] * arm[1], v[1] + w[2] * arm[0] - w[0] * arm[2], v[2] + w[0] * arm[1] - w[1] * arm[0]]
+        [
+            v[0] + w[1] * arm[2] - w[2] * arm[1],
+            v[1] + w[2] * arm[0] - w[0] * arm[2],
+            v[2] + w[0] * arm[1] - w[1] * arm[0],
+        ]
     }
 }
 
@@ -112,7 +117,13 @@ impl ParticleField {
     /// Adds a body with id `id`, centre of mass `centre` (node coordinates; anywhere),
     /// `velocity` and `spin` (lattice units); returns its index for [`add`](Self::add).
     /// Refuses non-finite values and more than [`MAX_BODIES`] bodies, naming the parameter.
-    pub fn add_body(&mut self, id: u32, centre: [f64; 3], velocity: [f64; 3], spin: [f64; 3]) -> Result<usize> {
+    pub fn add_body(
+        &mut self,
+        id: u32,
+        centre: [f64; 3],
+        velocity: [f64; 3],
+        spin: [f64; 3],
+    ) -> Result<usize> {
         let bad = |name, value, allowed| Err(Error::InvalidParameter { name, value, allowed });
         for (name, v) in [("centre", centre), ("velocity", velocity), ("spin", spin)] {
             if let Some(&c) = v.iter().find(|c| !c.is_finite()) {
@@ -120,7 +131,11 @@ impl ParticleField {
             }
         }
         if self.bodies.len() >= MAX_BODIES {
-            return bad("bodies", self.bodies.len() as f64, "at most hlbm::particles::MAX_BODIES bodies in a field");
+            return bad(
+                "bodies",
+                self.bodies.len() as f64,
+                "at most hlbm::particles::MAX_BODIES bodies in a field",
+            );
         }
         self.bodies.push(ParticleBody { id, centre, velocity, spin });
         Ok(self.bodies.len() - 1)
@@ -136,17 +151,29 @@ impl ParticleField {
     pub fn add(&mut self, body: usize, node: [i64; 3], d_b: f64) -> Result<()> {
         let dims = self.dims();
         if body >= self.bodies.len() {
-            return Err(Error::InvalidParameter { name: "body", value: body as f64, allowed: "an index returned by add_body" });
+            return Err(Error::InvalidParameter {
+                name: "body",
+                value: body as f64,
+                allowed: "an index returned by add_body",
+            });
         }
         if !(d_b > 0.0 && d_b <= 1.0) {
-            return Err(Error::InvalidParameter { name: "d_b", value: d_b, allowed: "0 < d_b <= 1" });
+            return Err(Error::InvalidParameter {
+                name: "d_b",
+                value: d_b,
+                allowed: "0 < d_b <= 1",
+            });
         }
         let mut at = [0usize; 3];
         let mut image = [0i8; 3];
         for d in 0..3 {
             let n = dims[d] as i64;
             if !(-n..2 * n).contains(&node[d]) {
-                return Err(Error::InvalidParameter { name: "node", value: node[d] as f64, allowed: "-n <= coordinate < 2n (within one lattice length)" });
+                return Err(Error::InvalidParameter {
+                    name: "node",
+                    value: node[d] as f64,
+                    allowed: "-n <= coordinate < 2n (within one lattice length)",
+                });
             }
             image[d] = node[d].div_euclid(n) as i8;
             at[d] = node[d].rem_euclid(n) as usize;
@@ -172,7 +199,14 @@ impl ParticleField {
     /// Refuses, naming the parameter, a radius or smoothing width that is not finite and
     /// positive, a non-finite centre or velocity, and a sphere whose reach `2 (radius +
     /// smoothing/2)` is not below every dimension of the lattice (it would cover nodes twice).
-    pub fn add_sphere(&mut self, centre: [f64; 3], radius: f64, smoothing: f64, velocity: [f64; 3], id: u32) -> Result<()> {
+    pub fn add_sphere(
+        &mut self,
+        centre: [f64; 3],
+        radius: f64,
+        smoothing: f64,
+        velocity: [f64; 3],
+        id: u32,
+    ) -> Result<()> {
         let bad = |name, value, allowed| Err(Error::InvalidParameter { name, value, allowed });
         let dims = self.dims();
         if !(radius > 0.0 && radius.is_finite()) {
@@ -194,12 +228,16 @@ impl ParticleField {
         // The centre wrapped into the lattice: the nodes then lie within one length of it.
         let centre = [0, 1, 2].map(|d| centre[d].rem_euclid(dims[d] as f64));
         let body = self.add_body(id, centre, velocity, [0.0; 3])?;
-        let (lo, hi) = (centre.map(|c| (c - reach).floor() as i64), centre.map(|c| (c + reach).ceil() as i64));
+        let (lo, hi) =
+            (centre.map(|c| (c - reach).floor() as i64), centre.map(|c| (c + reach).ceil() as i64));
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
                 for x in lo[0]..=hi[0] {
                     let arm = [x as f64 - centre[0], y as f64 - centre[1], z as f64 - centre[2]];
-                    let d_b = solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - radius, smoothing);
+                    let d_b = solid_fraction(
+                        (arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - radius,
+                        smoothing,
+                    );
                     if d_b > 0.0 {
                         self.add(body, [x, y, z], d_b)?;
                     }
@@ -218,7 +256,11 @@ impl ParticleField {
     ///
     /// Refuses, naming it, a body with a non-finite centre, velocity or spin, and more than
     /// [`MAX_BODIES`] bodies (the field is left empty).
-    pub fn fill_slabs<R: Send>(&mut self, bodies: Vec<ParticleBody>, fill: impl Fn(usize, &mut SlabRows) -> R + Sync) -> Result<Vec<R>> {
+    pub fn fill_slabs<R: Send>(
+        &mut self,
+        bodies: Vec<ParticleBody>,
+        fill: impl Fn(usize, &mut SlabRows) -> R + Sync,
+    ) -> Result<Vec<R>> {
         use rayon::prelude::*;
         // The rows are cleared slab by slab below; only a refused body clears them here.
         self.bodies.clear();
@@ -244,9 +286,11 @@ impl ParticleField {
                     // Most rows come in order, each node once: one pass tells.
                     if !row.is_sorted_by(|a, b| a.x < b.x) {
                         row.sort_by_key(|n| n.x);
-                        row.dedup_by(|later, kept| later.x == kept.x && {
-                            superpose(kept, later);
-                            true
+                        row.dedup_by(|later, kept| {
+                            later.x == kept.x && {
+                                superpose(kept, later);
+                                true
+                            }
                         });
                     }
                     count += row.len();
@@ -271,12 +315,18 @@ impl ParticleField {
     /// The body covering `node` of row `(y, z)`, the node's lever arm (node − centre, on the
     /// body's side of a periodic face) and its velocity there (lattice units).
     #[inline(always)]
-    pub fn motion(&self, node: &ParticleNode, y: usize, z: usize) -> (&ParticleBody, [f64; 3], [f64; 3]) {
+    pub fn motion(
+        &self,
+        node: &ParticleNode,
+        y: usize,
+        z: usize,
+    ) -> (&ParticleBody, [f64; 3], [f64; 3]) {
         let b = &self.bodies[node.body()];
         let image = node.image();
         let dims = self.dims();
         let at = [node.x as usize, y, z];
-        let arm = [0, 1, 2].map(|d| (at[d] as i64 + image[d] as i64 * dims[d] as i64) as f64 - b.centre[d]);
+        let arm = [0, 1, 2]
+            .map(|d| (at[d] as i64 + image[d] as i64 * dims[d] as i64) as f64 - b.centre[d]);
         (b, arm, b.velocity_at(arm))
     }
 

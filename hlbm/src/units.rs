@@ -28,7 +28,11 @@ impl UnitConverter {
         }
         let tau = 0.5 + 3.0 * nu * dt / (dx * dx);
         if !(tau > 0.5 + 1e-12) {
-            return Err(Error::InvalidParameter { name: "tau", value: tau, allowed: "tau > 0.5 (raise dt or nu, or lower dx)" });
+            return Err(Error::InvalidParameter {
+                name: "tau",
+                value: tau,
+                allowed: "tau > 0.5 (raise dt or nu, or lower dx)",
+            });
         }
         Ok(Self { dx, dt, nu, rho, tau })
     }

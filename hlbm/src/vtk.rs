@@ -14,7 +14,10 @@ fn io(path: &Path, e: std::io::Error) -> Error {
 
 /// Writes `path` complete or not at all: `write` fills a temporary file in the same folder,
 /// which is flushed to disk and renamed over `path` (removed if `write` fails).
-pub fn write_atomically(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| io(path, e))?;
     let mut w = BufWriter::new(tmp);
@@ -30,8 +33,16 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::
 pub fn write(lattice: &Lattice, path: &Path, dx: f64, velocity_scale: f64) -> Result<()> {
     let [nx, ny, nz] = lattice.dims();
     write_atomically(path, |w| {
-        writeln!(w, "# vtk DataFile Version 3.0\nhlbm step {}\nBINARY\nDATASET STRUCTURED_POINTS", lattice.time())?;
-        writeln!(w, "DIMENSIONS {nx} {ny} {nz}\nORIGIN 0 0 0\nSPACING {dx} {dx} {dx}\nPOINT_DATA {}", nx * ny * nz)?;
+        writeln!(
+            w,
+            "# vtk DataFile Version 3.0\nhlbm step {}\nBINARY\nDATASET STRUCTURED_POINTS",
+            lattice.time()
+        )?;
+        writeln!(
+            w,
+            "DIMENSIONS {nx} {ny} {nz}\nORIGIN 0 0 0\nSPACING {dx} {dx} {dx}\nPOINT_DATA {}",
+            nx * ny * nz
+        )?;
         let mut rho = Vec::with_capacity(nx * ny * nz);
         let mut vel = Vec::with_capacity(nx * ny * nz);
         let mut db = vec![0.0f32; nx * ny * nz];
@@ -41,7 +52,11 @@ pub fn write(lattice: &Lattice, path: &Path, dx: f64, velocity_scale: f64) -> Re
                     db[lattice.index(p.x as usize, y, z)] = p.d_b as f32;
                 }
                 for x in 0..nx {
-                    let (r, u) = if lattice.is_solid(lattice.index(x, y, z)) { (1.0, [0.0; 3]) } else { lattice.density_velocity(x, y, z) };
+                    let (r, u) = if lattice.is_solid(lattice.index(x, y, z)) {
+                        (1.0, [0.0; 3])
+                    } else {
+                        lattice.density_velocity(x, y, z)
+                    };
                     rho.push(r as f32);
                     vel.extend(u.map(|v| (v * velocity_scale) as f32));
                 }

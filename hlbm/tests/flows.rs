@@ -1,6 +1,6 @@
 //! Validation of the lattice: analytical flows, conservation, determinism, health checks.
 
-use hlbm::{ForceMethod, Error, Lattice, Storage, UnitConverter};
+use hlbm::{Error, ForceMethod, Lattice, Storage, UnitConverter};
 
 /// Force-driven channel between halfway bounce-back walls at z = 0.5 and z = h + 0.5.
 fn poiseuille_l2(h: usize, storage: Storage) -> f64 {
@@ -90,7 +90,10 @@ fn taylor_green_decay(storage: Storage) {
     let e1 = energy(&lat);
     let rate = (e0 / e1).ln() / 1000.0 / 4.0;
     let exact = nu * k * k;
-    println!("{storage:?}: decay rate {rate:.6e} vs {exact:.6e} ({:+.3} %)", (rate / exact - 1.0) * 100.0);
+    println!(
+        "{storage:?}: decay rate {rate:.6e} vs {exact:.6e} ({:+.3} %)",
+        (rate / exact - 1.0) * 100.0
+    );
     assert!((rate / exact - 1.0).abs() < 0.01, "decay rate {rate:e} vs {exact:e}");
 }
 
@@ -185,9 +188,18 @@ fn momentum_exchange_balances_the_driving_force_in_steady_flow() {
     lat.set_force_method(ForceMethod::MomentumExchange);
     let exchange = lat.step().unwrap().particle_forces[&7].force;
     let drive = mass * g;
-    println!("drive {drive:e}, forcing {:e}, exchange {:e} ({:.1e} off)", forcing[0], exchange[0], exchange[0] / drive - 1.0);
+    println!(
+        "drive {drive:e}, forcing {:e}, exchange {:e} ({:.1e} off)",
+        forcing[0],
+        exchange[0],
+        exchange[0] / drive - 1.0
+    );
     assert!((forcing[0] / drive - 1.0).abs() < 1e-4, "forcing {:e} vs drive {drive:e}", forcing[0]);
-    assert!((exchange[0] / drive - 1.0).abs() < 1e-4, "exchange {:e} vs drive {drive:e}", exchange[0]);
+    assert!(
+        (exchange[0] / drive - 1.0).abs() < 1e-4,
+        "exchange {:e} vs drive {drive:e}",
+        exchange[0]
+    );
     // The sphere is symmetric about the flow: no side force, no moment about the flow axis.
     for f in [forcing, exchange] {
         assert!(f[1].abs() < 1e-3 * f[0] && f[2].abs() < 1e-3 * f[0], "side force {f:?}");
@@ -230,9 +242,17 @@ fn blow_up_is_reported_with_step_and_node() {
 
 #[test]
 fn units_refuse_bad_input_and_round_trip() {
-    assert!(matches!(UnitConverter::new(1e-3, 1e-9, 1e-6, 1000.0).map(|u| u.tau()), Ok(t) if t > 0.5));
-    assert!(matches!(UnitConverter::from_tau(1e-3, 0.5, 1e-6, 1000.0), Err(Error::InvalidParameter { name: "tau", .. })));
-    assert!(matches!(UnitConverter::new(-1.0, 1e-3, 1e-6, 1.0), Err(Error::InvalidParameter { name: "dx", .. })));
+    assert!(
+        matches!(UnitConverter::new(1e-3, 1e-9, 1e-6, 1000.0).map(|u| u.tau()), Ok(t) if t > 0.5)
+    );
+    assert!(matches!(
+        UnitConverter::from_tau(1e-3, 0.5, 1e-6, 1000.0),
+        Err(Error::InvalidParameter { name: "tau", .. })
+    ));
+    assert!(matches!(
+        UnitConverter::new(-1.0, 1e-3, 1e-6, 1.0),
+        Err(Error::InvalidParameter { name: "dx", .. })
+    ));
     assert!(matches!(Lattice::new(4, 4, 4, 0.4), Err(Error::InvalidParameter { name: "tau", .. })));
     let u = UnitConverter::from_tau(3e-4, 0.55, 2.468e-5, 1000.0).unwrap();
     assert!((u.velocity_to_physical(u.velocity_to_lattice(0.37)) - 0.37).abs() < 1e-15);
@@ -248,7 +268,14 @@ fn units_refuse_bad_input_and_round_trip() {
 #[test]
 fn the_sweep_streams_and_collides_like_the_textbook() {
     use hlbm::d3q19::{equilibrium, C, OPP, Q};
-    for (nx, ny, nz, storage) in [(24, 5, 4, Storage::F64), (13, 4, 6, Storage::F64), (8, 3, 3, Storage::F64), (24, 5, 4, Storage::F32), (13, 4, 6, Storage::F32), (8, 3, 3, Storage::F32)] {
+    for (nx, ny, nz, storage) in [
+        (24, 5, 4, Storage::F64),
+        (13, 4, 6, Storage::F64),
+        (8, 3, 3, Storage::F64),
+        (24, 5, 4, Storage::F32),
+        (13, 4, 6, Storage::F32),
+        (8, 3, 3, Storage::F32),
+    ] {
         let tol = if storage == Storage::F64 { 1e-15 } else { 1e-8 };
         let mut lat = Lattice::new(nx, ny, nz, 0.7).unwrap();
         lat.set_storage(storage);
@@ -258,21 +285,31 @@ fn the_sweep_streams_and_collides_like_the_textbook() {
         }
         lat.initialise(|x, y, z| {
             let s = (x * 7 + y * 3 + z * 5) as f64;
-            (1.0 + 0.01 * (0.3 * s).sin(), [0.02 * (0.7 * s).cos(), -0.01 * (0.2 * s).sin(), 0.015 * (1.1 * s).cos()])
+            (
+                1.0 + 0.01 * (0.3 * s).sin(),
+                [0.02 * (0.7 * s).cos(), -0.01 * (0.2 * s).sin(), 0.015 * (1.1 * s).cos()],
+            )
         });
         let omega = 1.0 / lat.tau();
         for _ in 0..3 {
-            let before: Vec<[f64; Q]> = (0..nz).flat_map(|z| (0..ny).flat_map(move |y| (0..nx).map(move |x| (x, y, z)))).map(|(x, y, z)| lat.populations(x, y, z)).collect();
+            let before: Vec<[f64; Q]> = (0..nz)
+                .flat_map(|z| (0..ny).flat_map(move |y| (0..nx).map(move |x| (x, y, z))))
+                .map(|(x, y, z)| lat.populations(x, y, z))
+                .collect();
             let post: Vec<[f64; Q]> = before
                 .iter()
                 .map(|f| {
                     let rho: f64 = f.iter().sum();
-                    let u = [0, 1, 2].map(|d| (0..Q).map(|i| f[i] * C[i][d] as f64).sum::<f64>() / rho);
+                    let u =
+                        [0, 1, 2].map(|d| (0..Q).map(|i| f[i] * C[i][d] as f64).sum::<f64>() / rho);
                     std::array::from_fn(|i| f[i] + omega * (equilibrium(i, rho, u) - f[i]))
                 })
                 .collect();
             lat.step().unwrap();
-            let at = |x: i64, y: i64, z: i64| (z.rem_euclid(nz as i64) as usize * ny + y.rem_euclid(ny as i64) as usize) * nx + x.rem_euclid(nx as i64) as usize;
+            let at = |x: i64, y: i64, z: i64| {
+                (z.rem_euclid(nz as i64) as usize * ny + y.rem_euclid(ny as i64) as usize) * nx
+                    + x.rem_euclid(nx as i64) as usize
+            };
             for z in 0..nz {
                 for y in 0..ny {
                     for x in 0..nx {
@@ -282,8 +319,13 @@ fn the_sweep_streams_and_collides_like_the_textbook() {
                         }
                         let got = lat.populations(x, y, z);
                         for i in 0..Q {
-                            let src = at(x as i64 - C[i][0] as i64, y as i64 - C[i][1] as i64, z as i64 - C[i][2] as i64);
-                            let want = if lat.is_solid(src) { post[c][OPP[i]] } else { post[src][i] };
+                            let src = at(
+                                x as i64 - C[i][0] as i64,
+                                y as i64 - C[i][1] as i64,
+                                z as i64 - C[i][2] as i64,
+                            );
+                            let want =
+                                if lat.is_solid(src) { post[c][OPP[i]] } else { post[src][i] };
                             assert!((got[i] - want).abs() < tol, "{storage:?} {nx}x{ny}x{nz} node ({x},{y},{z}) direction {i}: {} vs {want}", got[i]);
                         }
                     }
@@ -310,7 +352,10 @@ fn a_particle_at_rest_against_a_wall_feels_no_force() {
             for y in 0..n {
                 for x in 0..n {
                     let arm = [x as f64 - c[0], y as f64 - c[1], z as f64 - c[2]];
-                    let d_b = hlbm::solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0, 1.0);
+                    let d_b = hlbm::solid_fraction(
+                        (arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0,
+                        1.0,
+                    );
                     if d_b > 0.0 {
                         lat.particles.add(body, [x, y, z].map(|i| i as i64), d_b).unwrap();
                     }
@@ -319,7 +364,10 @@ fn a_particle_at_rest_against_a_wall_feels_no_force() {
         }
         for _ in 0..3 {
             let f = lat.step().unwrap().particle_forces[&3].force;
-            assert!(f.iter().all(|c| c.abs() < 1e-12), "{method:?}: force {f:?} on a particle at rest");
+            assert!(
+                f.iter().all(|c| c.abs() < 1e-12),
+                "{method:?}: force {f:?} on a particle at rest"
+            );
         }
     }
 }
@@ -349,13 +397,20 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
                         v - dims[d] as f64 * (v / dims[d] as f64).round()
                     };
                     let arm = [image(x, 0), image(y, 1), image(z, 2)];
-                    let d_b = hlbm::solid_fraction((arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0, 1.0);
+                    let d_b = hlbm::solid_fraction(
+                        (arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2]).sqrt() - 4.0,
+                        1.0,
+                    );
                     let found = row.iter().find(|n| n.x as usize == x);
                     if d_b > 0.0 {
                         expected += 1;
                         let n = found.unwrap_or_else(|| panic!("node ({x}, {y}, {z}) missing"));
                         let (_, lever, _) = lat.particles.motion(n, y, z);
-                        assert!((n.d_b - d_b).abs() < 1e-12 && (0..3).all(|d| (lever[d] - arm[d]).abs() < 1e-12), "node ({x}, {y}, {z})");
+                        assert!(
+                            (n.d_b - d_b).abs() < 1e-12
+                                && (0..3).all(|d| (lever[d] - arm[d]).abs() < 1e-12),
+                            "node ({x}, {y}, {z})"
+                        );
                     } else {
                         assert!(found.is_none(), "node ({x}, {y}, {z}) covered");
                     }
@@ -367,14 +422,29 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
     let mut field = hlbm::ParticleField::new(16, 14, 12);
     assert_eq!(name(field.add_sphere([1.0; 3], -1.0, 1.0, [0.0; 3], 0).unwrap_err()), "radius");
     assert_eq!(name(field.add_sphere([1.0; 3], 5.6, 1.0, [0.0; 3], 0).unwrap_err()), "radius");
-    assert_eq!(name(field.add_sphere([1.0; 3], 2.0, f64::NAN, [0.0; 3], 0).unwrap_err()), "smoothing");
-    assert_eq!(name(field.add_sphere([1.0, f64::INFINITY, 1.0], 2.0, 1.0, [0.0; 3], 0).unwrap_err()), "centre");
-    assert_eq!(name(field.add_sphere([1.0; 3], 2.0, 1.0, [0.0, f64::NAN, 0.0], 0).unwrap_err()), "velocity");
+    assert_eq!(
+        name(field.add_sphere([1.0; 3], 2.0, f64::NAN, [0.0; 3], 0).unwrap_err()),
+        "smoothing"
+    );
+    assert_eq!(
+        name(field.add_sphere([1.0, f64::INFINITY, 1.0], 2.0, 1.0, [0.0; 3], 0).unwrap_err()),
+        "centre"
+    );
+    assert_eq!(
+        name(field.add_sphere([1.0; 3], 2.0, 1.0, [0.0, f64::NAN, 0.0], 0).unwrap_err()),
+        "velocity"
+    );
     assert!(field.is_empty());
     // Single nodes: a body from `add_body`, `0 < d_b <= 1`, within one lattice length.
-    assert_eq!(name(field.add_body(0, [1.0; 3], [0.0; 3], [0.0, f64::INFINITY, 0.0]).unwrap_err()), "spin");
+    assert_eq!(
+        name(field.add_body(0, [1.0; 3], [0.0; 3], [0.0, f64::INFINITY, 0.0]).unwrap_err()),
+        "spin"
+    );
     assert_eq!(name(field.add(0, [1, 1, 1], 0.5).unwrap_err()), "body");
-    let (a, b) = (field.add_body(10, [1.0; 3], [0.1, 0.0, 0.0], [0.0; 3]).unwrap(), field.add_body(11, [15.0, 1.0, 1.0], [0.0, 0.2, 0.0], [0.0; 3]).unwrap());
+    let (a, b) = (
+        field.add_body(10, [1.0; 3], [0.1, 0.0, 0.0], [0.0; 3]).unwrap(),
+        field.add_body(11, [15.0, 1.0, 1.0], [0.0, 0.2, 0.0], [0.0; 3]).unwrap(),
+    );
     assert_eq!(name(field.add(a, [1, 1, 1], 0.0).unwrap_err()), "d_b");
     assert_eq!(name(field.add(a, [1, 1, 1], 1.5).unwrap_err()), "d_b");
     assert_eq!(name(field.add(a, [1, 1, 24], 0.5).unwrap_err()), "node");
@@ -386,7 +456,10 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
     assert_eq!(field.len(), 1);
     let node = field.row(14 + 1)[0];
     let (body, arm, velocity) = field.motion(&node, 1, 1);
-    assert_eq!((node.x, node.d_b, body.id, arm, velocity), (0, 0.7, 11, [1.0, 0.0, 0.0], [0.0, 0.2, 0.0]));
+    assert_eq!(
+        (node.x, node.d_b, body.id, arm, velocity),
+        (0, 0.7, 11, [1.0, 0.0, 0.0], [0.0, 0.2, 0.0])
+    );
 }
 
 /// The solid fraction falls monotonically from 1 to 0 across the smoothing band, is ½ on the
@@ -400,7 +473,10 @@ fn solid_fraction_falls_monotonically_and_sums_to_the_volume() {
         let d = -eps + 2.0 * eps * i as f64 / 200.0;
         let db = hlbm::solid_fraction(d, eps);
         assert!((0.0..=1.0).contains(&db) && db <= last + 1e-15, "d_B({d}) = {db} after {last}");
-        assert!((db + hlbm::solid_fraction(-d, eps) - 1.0).abs() < 1e-12, "not symmetric at d = {d}");
+        assert!(
+            (db + hlbm::solid_fraction(-d, eps) - 1.0).abs() < 1e-12,
+            "not symmetric at d = {d}"
+        );
         last = db;
     }
     assert!((hlbm::solid_fraction(0.0, eps) - 0.5).abs() < 1e-15);
@@ -409,6 +485,9 @@ fn solid_fraction_falls_monotonically_and_sums_to_the_volume() {
         lat.particles.add_sphere([9.71, 10.13, 9.37], radius, eps, [0.0; 3], 1).unwrap();
         let sum: f64 = (0..400).flat_map(|r| lat.particles.row(r).iter().map(|n| n.d_b)).sum();
         let volume = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
-        assert!((sum / volume - 1.0).abs() < 0.02, "radius {radius}: Σ d_B = {sum}, volume {volume}");
+        assert!(
+            (sum / volume - 1.0).abs() < 0.02,
+            "radius {radius}: Σ d_B = {sum}, volume {volume}"
+        );
     }
 }

@@ -11,8 +11,8 @@
 //! exchange), the same at D = 12 cells, while Di Felice's factor (fitted in round tubes) says
 //! 0.864 / 0.915 / 0.943 — it over-corrects a square box of 10 D by ~8 %.
 
-use hlbm::{ForceMethod, Lattice, Storage};
 use hlbm::correlations::{di_felice_wall_factor, schiller_naumann_terminal_velocity};
+use hlbm::{ForceMethod, Lattice, Storage};
 
 #[test]
 fn sphere_reaches_the_schiller_naumann_terminal_velocity_with_the_forcing_momentum() {

@@ -31,7 +31,12 @@ const ROUNDS: usize = 24;
 /// conservative whatever it is. The rounds stop when the last one moved no bound by more than
 /// a quarter of a grid cell (`n` cells will be laid on the box), or after `ROUNDS`: the box
 /// may then be a little loose, never short.
-pub(super) fn overlap_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, rough: &Aabb, hint: Option<&Aabb>, n: usize) -> Option<Aabb> {
+pub(super) fn overlap_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    rough: &Aabb,
+    hint: Option<&Aabb>,
+    n: usize,
+) -> Option<Aabb> {
     let size = (rough.maxs - rough.mins).length();
     if !(size.is_finite() && size > 0.0) {
         return Some(*rough);
@@ -123,7 +128,9 @@ fn extremes(faces: &[Face], tie: Real) -> Vec<Vector> {
     }
     let mut out: Vec<Vector> = Vec::with_capacity(8);
     for v in faces.iter().flat_map(|f| f.verts.iter()) {
-        if (0..3).any(|j| v[j] <= best[2 * j] + tie || -v[j] <= best[2 * j + 1] + tie) && !out.contains(v) {
+        if (0..3).any(|j| v[j] <= best[2 * j] + tie || -v[j] <= best[2 * j + 1] + tie)
+            && !out.contains(v)
+        {
             out.push(*v);
         }
     }

@@ -32,24 +32,52 @@ fn cap_centroid(h: Real, r: Real) -> Real {
 /// apart. `None` when the pair is of another kind or the configuration is one the closed form
 /// does not cover (one body inside the other, concentric spheres): the caller integrates on the
 /// grid then.
-pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(a: &A, pose_a: &Pose, b: &B, pose_b: &Pose, eps: [Real; 2]) -> Option<Option<OverlapGeometry>> {
+pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    a: &A,
+    pose_a: &Pose,
+    b: &B,
+    pose_b: &Pose,
+    eps: [Real; 2],
+) -> Option<Option<OverlapGeometry>> {
     match (a.sphere_radius(), b.sphere_radius()) {
-        (Some(ra), Some(rb)) => lens(pose_a.translation, ra + eps[0], pose_b.translation, rb + eps[1], pose_b),
+        (Some(ra), Some(rb)) => {
+            lens(pose_a.translation, ra + eps[0], pose_b.translation, rb + eps[1], pose_b)
+        }
         (Some(ra), None) => {
             let n = pose_b.rotation * b.half_space_normal()?;
             // The half-space `n·(x − t_B) <= eps_B`; A's cap beyond it, normal from B to A.
-            cap_on_plane(pose_a.translation, ra + eps[0], n, n.dot(pose_b.translation) + eps[1], n, pose_b)
+            cap_on_plane(
+                pose_a.translation,
+                ra + eps[0],
+                n,
+                n.dot(pose_b.translation) + eps[1],
+                n,
+                pose_b,
+            )
         }
         (None, Some(rb)) => {
             let n = pose_a.rotation * a.half_space_normal()?;
-            cap_on_plane(pose_b.translation, rb + eps[1], n, n.dot(pose_a.translation) + eps[0], -n, pose_b)
+            cap_on_plane(
+                pose_b.translation,
+                rb + eps[1],
+                n,
+                n.dot(pose_a.translation) + eps[0],
+                -n,
+                pose_b,
+            )
         }
         (None, None) => None,
     }
 }
 
 /// Two spheres: A of radius `a` at `ca`, B of radius `b` at `cb`.
-fn lens(ca: Vector, a: Real, cb: Vector, b: Real, pose_b: &Pose) -> Option<Option<OverlapGeometry>> {
+fn lens(
+    ca: Vector,
+    a: Real,
+    cb: Vector,
+    b: Real,
+    pose_b: &Pose,
+) -> Option<Option<OverlapGeometry>> {
     let d = (ca - cb).length();
     if d >= a + b {
         return Some(None);
@@ -63,7 +91,8 @@ fn lens(ca: Vector, a: Real, cb: Vector, b: Real, pose_b: &Pose) -> Option<Optio
     let (ha, hb) = (s * (b - a + d) / (2.0 * d), s * (a - b + d) / (2.0 * d));
     let (va, vb) = (cap_volume(ha, a), cap_volume(hb, b));
     let volume = va + vb;
-    let contact_point = ((ca - n * cap_centroid(ha, a)) * va + (cb + n * cap_centroid(hb, b)) * vb) / volume;
+    let contact_point =
+        ((ca - n * cap_centroid(ha, a)) * va + (cb + n * cap_centroid(hb, b)) * vb) / volume;
     let geometry = OverlapGeometry {
         volume,
         contact_point,
@@ -77,7 +106,14 @@ fn lens(ca: Vector, a: Real, cb: Vector, b: Real, pose_b: &Pose) -> Option<Optio
 
 /// A sphere of radius `r` at `c` cut by the plane `m·x = offset` (the half-space below it);
 /// `normal` is the contact normal from B to A.
-fn cap_on_plane(c: Vector, r: Real, m: Vector, offset: Real, normal: Vector, pose_b: &Pose) -> Option<Option<OverlapGeometry>> {
+fn cap_on_plane(
+    c: Vector,
+    r: Real,
+    m: Vector,
+    offset: Real,
+    normal: Vector,
+    pose_b: &Pose,
+) -> Option<Option<OverlapGeometry>> {
     let h = r - (m.dot(c) - offset);
     if h <= 0.0 {
         return Some(None);

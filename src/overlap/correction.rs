@@ -169,7 +169,8 @@ fn trace<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         // where v + v_next < step, and only there is the interval searched (when asked: rays
         // that are coarse for the overlap, i.e. the first search from a rough box).
         if !gaps {
-        } else if let Some((ti, vi)) = search_gap(&f, (t, v), (t_next, v_next), 4, closest, p, dir) {
+        } else if let Some((ti, vi)) = search_gap(&f, (t, v), (t_next, v_next), 4, closest, p, dir)
+        {
             let hit = crossing(f, (t, v), (ti, vi), tol, tol);
             return Some(p + dir * hit);
         }
@@ -199,5 +200,6 @@ fn search_gap(
     if vm <= 0.0 {
         return Some((tm, vm));
     }
-    search_gap(f, a, (tm, vm), depth - 1, closest, p, dir).or_else(|| search_gap(f, (tm, vm), b, depth - 1, closest, p, dir))
+    search_gap(f, a, (tm, vm), depth - 1, closest, p, dir)
+        .or_else(|| search_gap(f, (tm, vm), b, depth - 1, closest, p, dir))
 }

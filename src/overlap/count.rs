@@ -44,15 +44,27 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                 // Only nodes next to the overlap can be on its surface layer.
                 let near = |i: usize, j: usize, k: usize| {
                     let (lo, hi) = (|v: usize| v.saturating_sub(1), |v: usize| (v + 1).min(n));
-                    (lo(k)..=hi(k)).any(|kk| (lo(j)..=hi(j)).any(|jj| (lo(i)..=hi(i)).any(|ii| inside(ii, jj, kk))))
+                    (lo(k)..=hi(k)).any(|kk| {
+                        (lo(j)..=hi(j)).any(|jj| (lo(i)..=hi(i)).any(|ii| inside(ii, jj, kk)))
+                    })
                 };
                 if !near(i, j, k) {
                     continue;
                 }
                 let x = grid.node(i, j, k);
-                let (g, sign) = if db >= da { (pair.b.gradient(x), 1.0) } else { (pair.a.gradient(x), -1.0) };
-                let step = |c: Real| if c > SECTOR { -1i64 } else if c < -SECTOR { 1 } else { 0 };
-                let (si, sj, sk) = (i as i64 + step(g.x), j as i64 + step(g.y), k as i64 + step(g.z));
+                let (g, sign) =
+                    if db >= da { (pair.b.gradient(x), 1.0) } else { (pair.a.gradient(x), -1.0) };
+                let step = |c: Real| {
+                    if c > SECTOR {
+                        -1i64
+                    } else if c < -SECTOR {
+                        1
+                    } else {
+                        0
+                    }
+                };
+                let (si, sj, sk) =
+                    (i as i64 + step(g.x), j as i64 + step(g.y), k as i64 + step(g.z));
                 let ok = |v: i64| (0..=n as i64).contains(&v);
                 if (si, sj, sk) == (i as i64, j as i64, k as i64) || !(ok(si) && ok(sj) && ok(sk)) {
                     continue;

@@ -65,8 +65,13 @@ pub(super) struct Scratch {
 
 impl Scratch {
     pub(super) fn new() -> Self {
-        let poly = || Poly { verts: Vec::with_capacity(MAX_VERTS), faces: Vec::with_capacity(MAX_FACES) };
-        Self { polys: [poly(), poly()], cap: Vec::with_capacity(2 * MAX_FACES), sides: Vec::with_capacity(MAX_VERTS) }
+        let poly =
+            || Poly { verts: Vec::with_capacity(MAX_VERTS), faces: Vec::with_capacity(MAX_FACES) };
+        Self {
+            polys: [poly(), poly()],
+            cap: Vec::with_capacity(2 * MAX_FACES),
+            sides: Vec::with_capacity(MAX_VERTS),
+        }
     }
 }
 
@@ -91,7 +96,12 @@ pub(super) fn cuts(plane: &Plane, lo: Vector, hi: Vector, tol: Real) -> bool {
 /// The cell `lo`–`hi` clipped by `planes`: `Some` with its integrals (zero volume when the
 /// planes cut it away), `None` when the polyhedron would outgrow the buffers (the caller
 /// integrates the cell's tetrahedra instead).
-pub(super) fn clip_cell(lo: Vector, hi: Vector, planes: &mut [Plane], scratch: &mut Scratch) -> Option<Clipped> {
+pub(super) fn clip_cell(
+    lo: Vector,
+    hi: Vector,
+    planes: &mut [Plane],
+    scratch: &mut Scratch,
+) -> Option<Clipped> {
     let size = (hi - lo).length();
     let tol = 1e-12 * size;
     // An order by the geometry: the same for either labelling of the bodies.
@@ -116,12 +126,24 @@ pub(super) fn clip_cell(lo: Vector, hi: Vector, planes: &mut [Plane], scratch: &
         }
     }
     let poly = &polys[cur];
-    let mut out = Clipped { volume: 0.0, moment: Vector::ZERO, normal: [Vector::ZERO; 2], area: [0.0; 2], lo: Vector::splat(Real::INFINITY), hi: Vector::splat(Real::NEG_INFINITY) };
+    let mut out = Clipped {
+        volume: 0.0,
+        moment: Vector::ZERO,
+        normal: [Vector::ZERO; 2],
+        area: [0.0; 2],
+        lo: Vector::splat(Real::INFINITY),
+        hi: Vector::splat(Real::NEG_INFINITY),
+    };
     let points: usize = poly.faces.iter().map(|f| f.len).sum();
     if points == 0 {
         return Some(out);
     }
-    let inner = poly.faces.iter().flat_map(|f| poly.verts[f.start..f.start + f.len].iter().copied()).sum::<Vector>() / points as Real;
+    let inner = poly
+        .faces
+        .iter()
+        .flat_map(|f| poly.verts[f.start..f.start + f.len].iter().copied())
+        .sum::<Vector>()
+        / points as Real;
     for f in &poly.faces {
         let p = &poly.verts[f.start..f.start + f.len];
         let mut a = Vector::ZERO;
@@ -146,7 +168,13 @@ pub(super) fn clip_cell(lo: Vector, hi: Vector, planes: &mut [Plane], scratch: &
 
 /// The six faces of the box `lo`–`hi`.
 fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
-    let corner = |c: usize| Vector::new(if c & 1 == 0 { lo.x } else { hi.x }, if c & 2 == 0 { lo.y } else { hi.y }, if c & 4 == 0 { lo.z } else { hi.z });
+    let corner = |c: usize| {
+        Vector::new(
+            if c & 1 == 0 { lo.x } else { hi.x },
+            if c & 2 == 0 { lo.y } else { hi.y },
+            if c & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
     // Corner indices of each face, counter-clockwise seen from outside.
     const QUADS: [([usize; 4], [Real; 3]); 6] = [
         ([0, 4, 6, 2], [-1.0, 0.0, 0.0]),
@@ -159,7 +187,12 @@ fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
     poly.verts.clear();
     poly.faces.clear();
     for (quad, n) in QUADS {
-        poly.faces.push(Face { start: poly.verts.len(), len: 4, body: None, normal: Vector::from_array(n) });
+        poly.faces.push(Face {
+            start: poly.verts.len(),
+            len: 4,
+            body: None,
+            normal: Vector::from_array(n),
+        });
         poly.verts.extend(quad.iter().map(|&c| corner(c)));
     }
 }
@@ -167,7 +200,14 @@ fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
 /// Writes into `to` the part of `from` with `n·x <= h`, closed by a face on the plane; returns
 /// `Some(false)` (and leaves `to` alone) when the plane cuts nothing off, `None` when the
 /// result would outgrow the buffers.
-fn clip(from: &Poly, to: &mut Poly, cap: &mut Vec<Vector>, sides: &mut Vec<Real>, plane: Plane, tol: Real) -> Option<bool> {
+fn clip(
+    from: &Poly,
+    to: &mut Poly,
+    cap: &mut Vec<Vector>,
+    sides: &mut Vec<Real>,
+    plane: Plane,
+    tol: Real,
+) -> Option<bool> {
     sides.clear();
     sides.extend(from.verts.iter().map(|&x| {
         let s = plane.n.dot(x) - plane.h;
@@ -211,7 +251,12 @@ fn clip(from: &Poly, to: &mut Poly, cap: &mut Vec<Vector>, sides: &mut Vec<Real>
     super::polyhedra::cap_polygon(cap, plane.n, tol);
     let distinct = cap.len();
     if distinct >= 3 && !to.faces.is_empty() {
-        to.faces.push(Face { start: to.verts.len(), len: distinct, body: Some(plane.body), normal: plane.n });
+        to.faces.push(Face {
+            start: to.verts.len(),
+            len: distinct,
+            body: Some(plane.body),
+            normal: plane.n,
+        });
         to.verts.extend_from_slice(cap);
     }
     (to.verts.len() <= MAX_VERTS && to.faces.len() <= MAX_FACES).then_some(true)
@@ -247,6 +292,9 @@ mod tests {
         assert!((c.volume - 0.25).abs() < 1e-14);
         assert!((c.area[0] - 1.0).abs() < 1e-14 && c.area[1] == 0.0);
         let mut beyond = [Plane { n: -Vector::Z, h: -1.5, body: 1 }];
-        assert_eq!(clip_cell(Vector::ZERO, Vector::ONE, &mut beyond, &mut Scratch::new()).unwrap().volume, 0.0);
+        assert_eq!(
+            clip_cell(Vector::ZERO, Vector::ONE, &mut beyond, &mut Scratch::new()).unwrap().volume,
+            0.0
+        );
     }
 }

@@ -32,8 +32,8 @@
 
 mod bound;
 mod closed_form;
-mod count;
 mod correction;
+mod count;
 mod crease;
 mod polyhedra;
 mod subcell;
@@ -83,7 +83,13 @@ impl OverlapSettings {
     /// `n_c >= 1` grid cells per direction on the overlap's box.
     pub fn new(n_c: usize, mode: IntegrationMode) -> Result<Self> {
         check_range("n_c", n_c as Real, 1.0, true, 1024.0, true, "integer 1 <= N_c <= 1024")?;
-        Ok(Self { n_c, mode, enlargement: [0.0; 2], closed_form_spheres: false, exact_polyhedra: false })
+        Ok(Self {
+            n_c,
+            mode,
+            enlargement: [0.0; 2],
+            closed_form_spheres: false,
+            exact_polyhedra: false,
+        })
     }
 
     /// Sphere–sphere and sphere–half-space pairs get their overlap in closed form (a lens of
@@ -122,7 +128,10 @@ impl OverlapSettings {
 
     /// Contact enlargement `ε_A, ε_B >= 0` (m): a node is inside when `d_A <= ε_A` and `d_B <= ε_B`.
     pub fn with_enlargement(mut self, eps_a: Real, eps_b: Real) -> Result<Self> {
-        self.enlargement = [check_non_negative("enlargement_a", eps_a)?, check_non_negative("enlargement_b", eps_b)?];
+        self.enlargement = [
+            check_non_negative("enlargement_a", eps_a)?,
+            check_non_negative("enlargement_b", eps_b)?,
+        ];
         Ok(self)
     }
 
@@ -188,7 +197,11 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
     /// The shape's closed-form crossing of the segment from `inside` to `outside`, as the
     /// fraction from `inside` ([`Sdf::segment_crossing`]).
     fn segment_crossing(&self, inside: Vector, outside: Vector) -> Option<Real> {
-        self.shape.segment_crossing(self.rot_t * (inside - self.origin), self.rot_t * (outside - self.origin), self.eps)
+        self.shape.segment_crossing(
+            self.rot_t * (inside - self.origin),
+            self.rot_t * (outside - self.origin),
+            self.eps,
+        )
     }
 
     /// The body's face planes `(n, h)` in the pair's frame (`n·x <= h` inside), moved out by `ε`.
@@ -282,7 +295,13 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Pair<'_, A, B> {
 /// falsi with a bisection every fourth step: superlinear, always bracketed, never stalls.
 /// Stops when the bracket is narrower than `tol` or `|f| <= f_tol` (for a distance function,
 /// the point is then within `f_tol` of the surface).
-pub(crate) fn crossing(f: impl Fn(Real) -> Real, a: (Real, Real), b: (Real, Real), tol: Real, f_tol: Real) -> Real {
+pub(crate) fn crossing(
+    f: impl Fn(Real) -> Real,
+    a: (Real, Real),
+    b: (Real, Real),
+    tol: Real,
+    f_tol: Real,
+) -> Real {
     let ((mut ta, mut fa), (mut tb, mut fb)) = (a, b);
     if fa == 0.0 {
         return ta;
@@ -332,7 +351,8 @@ impl Grid {
     fn on(b: &Aabb, n: usize) -> Option<Self> {
         let w = b.maxs - b.mins;
         let mut h = w / n as Real;
-        let smallest = [h.x, h.y, h.z].into_iter().filter(|v| *v > 0.0).fold(Real::INFINITY, Real::min);
+        let smallest =
+            [h.x, h.y, h.z].into_iter().filter(|v| *v > 0.0).fold(Real::INFINITY, Real::min);
         if !smallest.is_finite() {
             return None;
         }
@@ -419,13 +439,18 @@ fn pose_check(what: &'static str, p: &Pose) -> Result<()> {
     if p.is_finite() && (p.rotation.length() - 1.0).abs() < 1e-6 {
         Ok(())
     } else {
-        Err(Error::NonFinite { what, detail: format!("{p:?} (needs finite values and a unit quaternion)") })
+        Err(Error::NonFinite {
+            what,
+            detail: format!("{p:?} (needs finite values and a unit quaternion)"),
+        })
     }
 }
 
 /// The conservative rough box of the pair in its frame (intersection of the bounds), or `None`
 /// when the bounds do not meet.
-fn conservative_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>) -> Result<Option<Aabb>> {
+fn conservative_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+) -> Result<Option<Aabb>> {
     let Some(b) = intersect(&pair.a.bounds(), &pair.b.bounds()) else { return Ok(None) };
     if !(b.mins.is_finite() && b.maxs.is_finite()) {
         return Err(Error::UnboundedOverlap { a: "body A".into(), b: "body B".into() });
@@ -441,11 +466,16 @@ fn placed<'a, S: Sdf + ?Sized>(shape: &'a S, rel: Pose, eps: Real) -> Placed<'a,
 /// Whether `settings` compute the pair in an exact form rather than on the grid: two balls or
 /// a ball and a half-space with closed-form spheres, two bodies with face planes with exact
 /// polyhedra. (An exact form may still fall back to the grid, at deep engulfment.)
-pub(crate) fn has_exact_form<A: Sdf + ?Sized, B: Sdf + ?Sized>(a: &A, b: &B, settings: &OverlapSettings) -> bool {
+pub(crate) fn has_exact_form<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    a: &A,
+    b: &B,
+    settings: &OverlapSettings,
+) -> bool {
     let (ball_a, ball_b) = (a.sphere_radius().is_some(), b.sphere_radius().is_some());
     let (plane_a, plane_b) = (a.half_space_normal().is_some(), b.half_space_normal().is_some());
     let spheres = (ball_a && (ball_b || plane_b)) || (ball_b && plane_a);
-    (settings.closed_form_spheres && spheres) || (settings.exact_polyhedra && a.face_planes().is_some() && b.face_planes().is_some())
+    (settings.closed_form_spheres && spheres)
+        || (settings.exact_polyhedra && a.face_planes().is_some() && b.face_planes().is_some())
 }
 
 /// Computes the overlap of body A (`a` at `pose_a`) and body B (`b` at `pose_b`).
@@ -474,7 +504,10 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     // bodies' boxes tight (a half-space's own frame is the only one bounding it).
     let in_frame = |frame: Pose| -> Result<(Pose, Pair<'_, A, B>, Option<Aabb>)> {
         let inv = frame.inverse();
-        let pair = Pair { a: placed(a, inv * *pose_a, settings.enlargement[0]), b: placed(b, inv * *pose_b, settings.enlargement[1]) };
+        let pair = Pair {
+            a: placed(a, inv * *pose_a, settings.enlargement[0]),
+            b: placed(b, inv * *pose_b, settings.enlargement[1]),
+        };
         let rough = conservative_box(&pair);
         match rough {
             Ok(r) => Ok((frame, pair, r)),
@@ -489,7 +522,11 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let (fa, fb) = (in_frame(*pose_a), in_frame(*pose_b));
     let (frame, pair, rough) = if volume(&fa) < volume(&fb) { fa? } else { fb? };
     let Some(rough) = rough else { return Ok(None) };
-    let to_world = |g: OverlapGeometry| OverlapGeometry { contact_point: frame.transform_point(g.contact_point), normal: frame.rotation * g.normal, ..g };
+    let to_world = |g: OverlapGeometry| OverlapGeometry {
+        contact_point: frame.transform_point(g.contact_point),
+        normal: frame.rotation * g.normal,
+        ..g
+    };
     if settings.exact_polyhedra {
         if let Some(decided) = polyhedra::overlap(&pair, &rough) {
             return Ok(decided.map(to_world));
@@ -502,11 +539,14 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         intersect(&Aabb::new(p.mins - Vector::splat(grow), p.maxs + Vector::splat(grow)), &rough)
     });
     let followed = match (settings.mode, previous_box) {
-        (IntegrationMode::Subcell, Some(p)) if reused.is_some() => follow(&pair, p, &rough, settings.n_c),
+        (IntegrationMode::Subcell, Some(p)) if reused.is_some() => {
+            follow(&pair, p, &rough, settings.n_c)
+        }
         _ => None,
     };
     let search = |seed: &Aabb| {
-        find_box(&pair, seed, &rough, settings.n_c, settings.mode).and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings))
+        find_box(&pair, seed, &rough, settings.n_c, settings.mode)
+            .and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings))
     };
     if settings.mode == IntegrationMode::Subcell {
         // A persistent contact follows its last box; a first touch (or a contact that moved
@@ -517,8 +557,12 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         if followed.is_some() {
             return Ok(followed.map(to_world));
         }
-        let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else { return Ok(None) };
-        return Ok(first_touch(&pair, &bounds, &rough, settings).or_else(|| search(&rough)).map(to_world));
+        let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else {
+            return Ok(None);
+        };
+        return Ok(first_touch(&pair, &bounds, &rough, settings)
+            .or_else(|| search(&rough))
+            .map(to_world));
     }
     // Counting: a persistent contact searches from its last box (grown when the overlap
     // reaches its faces). A first touch, or a contact its box lost, searches the cutting-plane
@@ -529,7 +573,9 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     if let Some(found) = reused.as_ref().and_then(&search) {
         return Ok(Some(to_world(found)));
     }
-    let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else { return Ok(None) };
+    let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else {
+        return Ok(None);
+    };
     let found = find_box(&pair, &bounds, &bounds, settings.n_c, settings.mode)
         .and_then(|corrected| overlap_in_box(&pair, &corrected, &bounds, settings))
         .or_else(|| overlap_in_box(&pair, &bounds, &bounds, settings))
@@ -595,7 +641,13 @@ fn find_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     }
     let (hits, searched) = found?;
     if mode == IntegrationMode::Count {
-        if let correction::Outcome::Box(b) = correction::correct(pair, &Grid::on(&searched, n)?, correction::Rays::Neighbours, None, false) {
+        if let correction::Outcome::Box(b) = correction::correct(
+            pair,
+            &Grid::on(&searched, n)?,
+            correction::Rays::Neighbours,
+            None,
+            false,
+        ) {
             return Some(b);
         }
     }
@@ -604,7 +656,11 @@ fn find_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 
 /// A box around the overlap near `start`: alternating projections onto the violated body
 /// find a point inside both, the exits along the axes from it give the box (doubled).
-fn locate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, start: Vector, rough: &Aabb) -> Option<Aabb> {
+fn locate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    start: Vector,
+    rough: &Aabb,
+) -> Option<Aabb> {
     let scale = (rough.maxs - rough.mins).length();
     let mut x = start;
     let mut inside = false;
@@ -687,20 +743,31 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 /// second grid is the finer one; its nodes do not lie on the pieces' extreme faces (a flat
 /// face there would lie on a node layer, where which cell's facet counts is decided by
 /// round-off).
-fn first_touch<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, bounds: &Aabb, rough: &Aabb, settings: &OverlapSettings) -> Option<OverlapGeometry> {
+fn first_touch<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    bounds: &Aabb,
+    rough: &Aabb,
+    settings: &OverlapSettings,
+) -> Option<OverlapGeometry> {
     let grid = Grid::on(bounds, settings.n_c)?;
     let pad = grid.h * 0.25;
     let padded = Grid::on(&Aabb::new(bounds.mins - pad, bounds.maxs + pad), settings.n_c)?;
     let integral = subcell::integrate(pair, &padded, &padded.sample(pair));
     let pieces = integral.bounds?;
-    overlap_in_box(pair, &pieces, rough, settings).or_else(|| finish(pair, integral, &grid, rough, pieces))
+    overlap_in_box(pair, &pieces, rough, settings)
+        .or_else(|| finish(pair, integral, &grid, rough, pieces))
 }
 
 /// A persistent sub-cell contact without a box search: last sub-step's box of the overlap's
 /// pieces, padded by one cell on every side, is integrated at the same spacing (`N_c + 2`
 /// cells), and the new pieces' box is next sub-step's. `None` when the overlap has reached
 /// the padding's outer node layer (it moved by more than a cell): then the search runs.
-fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, previous: &Aabb, rough: &Aabb, n: usize) -> Option<OverlapGeometry> {
+fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    previous: &Aabb,
+    rough: &Aabb,
+    n: usize,
+) -> Option<OverlapGeometry> {
     let inner = Grid::on(&intersect(previous, rough)?, n)?;
     let grid = inner.padded();
     let values = grid.sample(pair);
@@ -741,8 +808,16 @@ fn finish<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         return None;
     }
     let t_max = (rough.maxs - rough.mins).length().max(grid.h.max_element());
-    let indentation = pair.exit_distance(x_c, normal, t_max) + pair.exit_distance(x_c, -normal, t_max);
-    Some(OverlapGeometry { volume: integral.volume, contact_point: x_c, normal, indentation, surface_area: integral.surface_area, corrected_box })
+    let indentation =
+        pair.exit_distance(x_c, normal, t_max) + pair.exit_distance(x_c, -normal, t_max);
+    Some(OverlapGeometry {
+        volume: integral.volume,
+        contact_point: x_c,
+        normal,
+        indentation,
+        surface_area: integral.surface_area,
+        corrected_box,
+    })
 }
 
 deserialize_checked!(OverlapSettings via SettingsFields { n_c: usize, mode: IntegrationMode, enlargement: [Real; 2], closed_form_spheres: bool, exact_polyhedra: bool }

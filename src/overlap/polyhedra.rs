@@ -50,7 +50,12 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     // engulfed).
     planes.sort_by(|p, q| {
         let key = |(n, h, _): &(Vector, Real, usize)| [n.x, n.y, n.z, *h];
-        key(p).iter().zip(key(q).iter()).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(core::cmp::Ordering::Equal)
+        key(p)
+            .iter()
+            .zip(key(q).iter())
+            .map(|(x, y)| x.total_cmp(y))
+            .find(|o| o.is_ne())
+            .unwrap_or(core::cmp::Ordering::Equal)
     });
     let size = (rough.maxs - rough.mins).length();
     if !(size.is_finite() && size > 0.0) {
@@ -64,7 +69,8 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let mut pad = 0.01 * size + 2.0 * (pair.a.eps + pair.b.eps);
     let faces = 'grow: {
         for _ in 0..4 {
-            let mut faces = start_box(rough.mins - Vector::splat(pad), rough.maxs + Vector::splat(pad));
+            let mut faces =
+                start_box(rough.mins - Vector::splat(pad), rough.maxs + Vector::splat(pad));
             for &(n, h, body) in &planes {
                 clip(&mut faces, n, h, body, tol);
                 if faces.is_empty() {
@@ -79,25 +85,15 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         return None;
     };
     let count: usize = faces.iter().map(|f| f.verts.len()).sum();
-    let inner = faces
-        .iter()
-        .flat_map(|f| f.verts.iter().copied())
-        .sum::<Vector>()
-        / count as Real;
+    let inner = faces.iter().flat_map(|f| f.verts.iter().copied()).sum::<Vector>() / count as Real;
     let (mut volume, mut moment) = (0.0, Vector::ZERO);
     let (mut area_vec, mut area) = ([Vector::ZERO; 2], [0.0; 2]);
-    let (mut lo, mut hi) = (
-        Vector::splat(Real::INFINITY),
-        Vector::splat(Real::NEG_INFINITY),
-    );
+    let (mut lo, mut hi) = (Vector::splat(Real::INFINITY), Vector::splat(Real::NEG_INFINITY));
     for f in &faces {
         let p = &f.verts;
         let mut a = 0.0;
         for i in 1..p.len() - 1 {
-            let v = (p[0] - inner)
-                .dot((p[i] - inner).cross(p[i + 1] - inner))
-                .abs()
-                / 6.0;
+            let v = (p[0] - inner).dot((p[i] - inner).cross(p[i + 1] - inner)).abs() / 6.0;
             volume += v;
             moment += (inner + p[0] + p[i] + p[i + 1]) * (0.25 * v);
             a += 0.5 * (p[i] - p[0]).cross(p[i + 1] - p[0]).length();
@@ -154,17 +150,11 @@ pub(super) fn start_box(lo: Vector, hi: Vector) -> Vec<Face> {
     for axis in 0..3 {
         for side in 0..2 {
             let bit = 1 << axis;
-            let mut verts: Vec<Vector> = (0..8)
-                .filter(|c| (c & bit != 0) == (side == 1))
-                .map(corner)
-                .collect();
+            let mut verts: Vec<Vector> =
+                (0..8).filter(|c| (c & bit != 0) == (side == 1)).map(corner).collect();
             let normal = Vector::AXES[axis] * if side == 1 { 1.0 } else { -1.0 };
             order_around(&mut verts, normal);
-            faces.push(Face {
-                verts,
-                normal,
-                body: None,
-            });
+            faces.push(Face { verts, normal, body: None });
         }
     }
     faces
@@ -182,10 +172,7 @@ pub(super) fn clip(faces: &mut Vec<Face>, n: Vector, h: Real, body: usize, tol: 
             s
         }
     };
-    if faces
-        .iter()
-        .all(|f| f.verts.iter().all(|&v| side(v) <= 0.0))
-    {
+    if faces.iter().all(|f| f.verts.iter().all(|&v| side(v) <= 0.0)) {
         return;
     }
     let mut cap: Vec<Vector> = Vec::new();
@@ -218,11 +205,7 @@ pub(super) fn clip(faces: &mut Vec<Face>, n: Vector, h: Real, body: usize, tol: 
     cap_polygon(&mut cap, n, tol);
     let distinct = cap.len();
     if distinct >= 3 && !faces.is_empty() {
-        faces.push(Face {
-            verts: cap,
-            normal: n,
-            body: Some(body),
-        });
+        faces.push(Face { verts: cap, normal: n, body: Some(body) });
     }
 }
 

@@ -41,7 +41,8 @@ use crate::shape::Sdf;
 /// Kuhn decomposition of the unit cell (corner bits: x = 1, y = 2, z = 4) into six tetrahedra
 /// around the diagonal 0–7. Along each, the corner bits only grow, so every edge is a
 /// "forward" edge from its lower corner in direction `upper ^ lower` (1..=7).
-const TETS: [[usize; 4]; 6] = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]];
+const TETS: [[usize; 4]; 6] =
+    [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]];
 
 /// Relative accuracy of a surface crossing on an edge (fraction of the edge, and distance
 /// from the surface per edge length): far below the second-order discretisation error.
@@ -256,9 +257,14 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     fn cut(&mut self, s: usize, p: &Vert, q: &Vert) -> Vert {
         let o = 1 - s;
         let (pn, qn) = (p.node(), q.node());
-        let ((lo, lo_node), (hi, hi_node)) = if pn < qn { ((p, pn), (q, qn)) } else { ((q, qn), (p, pn)) };
+        let ((lo, lo_node), (hi, hi_node)) =
+            if pn < qn { ((p, pn), (q, qn)) } else { ((q, qn), (p, pn)) };
         let cached = hi_node != NOT_A_NODE;
-        let slot = if cached { Some((lo_node as usize, self.cache.dir(lo_node, hi_node) - 1)) } else { None };
+        let slot = if cached {
+            Some((lo_node as usize, self.cache.dir(lo_node, hi_node) - 1))
+        } else {
+            None
+        };
         let key = slot.map_or(NO_KEY, |(n, k)| Vert::crossing_key(n as u32, k, s));
         let e = hi.x - lo.x;
         let mut d = [0.0; 2];
@@ -274,9 +280,12 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             }
         }
         // An edge the first clip made, between two named points: its crossing may be known.
-        let ends = (p.key != NO_KEY && q.key != NO_KEY && !cached).then(|| (p.key.min(q.key), p.key.max(q.key)));
+        let ends = (p.key != NO_KEY && q.key != NO_KEY && !cached)
+            .then(|| (p.key.min(q.key), p.key.max(q.key)));
         if let Some((k0, k1)) = ends {
-            if let Some(m) = self.memo[..self.memo_len].iter().find(|m| m.0 == k0 && m.1 == k1 && m.2 == s) {
+            if let Some(m) =
+                self.memo[..self.memo_len].iter().find(|m| m.0 == k0 && m.1 == k1 && m.2 == s)
+            {
                 return m.3;
             }
         }
@@ -336,7 +345,8 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             }
         }
         let outward = || {
-            let mean = |idx: &[usize]| idx.iter().map(|&i| p[i].x).sum::<Vector>() / idx.len() as Real;
+            let mean =
+                |idx: &[usize]| idx.iter().map(|&i| p[i].x).sum::<Vector>() / idx.len() as Real;
             mean(&pos[..np]) - mean(&neg[..nn])
         };
         match nn {
@@ -344,14 +354,22 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             4 => piece(self, p),
             1 => {
                 let (i, [a, b, c]) = (neg[0], [pos[0], pos[1], pos[2]]);
-                let q = [self.cut(s, &p[i], &p[a]), self.cut(s, &p[i], &p[b]), self.cut(s, &p[i], &p[c])];
+                let q = [
+                    self.cut(s, &p[i], &p[a]),
+                    self.cut(s, &p[i], &p[b]),
+                    self.cut(s, &p[i], &p[c]),
+                ];
                 piece(self, &[p[i], q[0], q[1], q[2]]);
                 facet(self, &q, outward());
             }
             3 => {
                 // Prism (a, b, c) – (qa, qb, qc) as three tetrahedra.
                 let (i, [a, b, c]) = (pos[0], [neg[0], neg[1], neg[2]]);
-                let q = [self.cut(s, &p[a], &p[i]), self.cut(s, &p[b], &p[i]), self.cut(s, &p[c], &p[i])];
+                let q = [
+                    self.cut(s, &p[a], &p[i]),
+                    self.cut(s, &p[b], &p[i]),
+                    self.cut(s, &p[c], &p[i]),
+                ];
                 piece(self, &[p[a], p[b], p[c], q[2]]);
                 piece(self, &[p[a], p[b], q[1], q[2]]);
                 piece(self, &[p[a], q[0], q[1], q[2]]);
@@ -460,7 +478,11 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
 }
 
 /// Integrates the overlap on `grid` from node values `(d_A, d_B)`.
-pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>, grid: &Grid, values: &[(Real, Real)]) -> Integral {
+pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    grid: &Grid,
+    values: &[(Real, Real)],
+) -> Integral {
     let n = grid.n;
     let m = n + 1;
     let h = grid.h;
@@ -468,8 +490,24 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
     let cell = h.x * h.y * h.z;
     let unset = Vert { x: Vector::ZERO, d: [0.0; 2], key: NO_KEY };
     let inf = Vector::splat(Real::INFINITY);
-    let sums = Sums { volume: 0.0, moment: Vector::ZERO, normal: [Vector::ZERO; 2], area: [0.0; 2], lo: inf, hi: -inf };
-    let mut cutter = Cutter { pair, cache: EdgeCache::new(values.len(), m), need_other: true, memo: [(0, 0, 0, unset); MEMO], memo_len: 0, sums, edges: [pair.a.has_edges(), pair.b.has_edges()], scratch: crease::Scratch::new() };
+    let sums = Sums {
+        volume: 0.0,
+        moment: Vector::ZERO,
+        normal: [Vector::ZERO; 2],
+        area: [0.0; 2],
+        lo: inf,
+        hi: -inf,
+    };
+    let mut cutter = Cutter {
+        pair,
+        cache: EdgeCache::new(values.len(), m),
+        need_other: true,
+        memo: [(0, 0, 0, unset); MEMO],
+        memo_len: 0,
+        sums,
+        edges: [pair.a.has_edges(), pair.b.has_edges()],
+        scratch: crease::Scratch::new(),
+    };
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
     for k in 0..n {
@@ -506,7 +544,11 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(pair: &Pair<'_, A, B>,
                 let corners: [Vert; 8] = core::array::from_fn(|c| {
                     let node = base + offsets[c];
                     let (da, db) = values[node];
-                    Vert { x: origin + h * corner(c), d: [da, db], key: Vert::node_key(node as u32) }
+                    Vert {
+                        x: origin + h * corner(c),
+                        d: [da, db],
+                        key: Vert::node_key(node as u32),
+                    }
                 });
                 cutter.memo_len = 0;
                 cutter.cell(&corners, h, [in_a, in_b]);
@@ -546,7 +588,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         let diagonal = h.length();
         let tested = [self.edges[0] && in_a != 0xFF, self.edges[1] && in_b != 0xFF];
         let (ca, cb) = if tested[0] || tested[1] { self.pair.both(centre) } else { (0.0, 0.0) };
-        if (tested[0] && in_a == 0 && ca > 0.5 * diagonal) || (tested[1] && in_b == 0 && cb > 0.5 * diagonal) {
+        if (tested[0] && in_a == 0 && ca > 0.5 * diagonal)
+            || (tested[1] && in_b == 0 && cb > 0.5 * diagonal)
+        {
             return;
         }
         let bent = |s: usize, d: Real| {
@@ -560,9 +604,20 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             // A bent body's surface by its planes at all samples; a body that holds only part of
             // the cell but is not bent in it (a flat or gently curved face) by its plane at
             // the centre, as good as interpolation there.
-            let samples = |s: usize, inside: u8| if inside == 0xFF { 0 } else if bends[s] { SAMPLES } else { 1 };
-            let (mut planes, len) = self.tangent_planes(c, [samples(0, in_a), samples(1, in_b)], [ca, cb]);
-            if let Some(k) = crease::clip_cell(c[0].x, c[7].x, &mut planes[..len], &mut self.scratch) {
+            let samples = |s: usize, inside: u8| {
+                if inside == 0xFF {
+                    0
+                } else if bends[s] {
+                    SAMPLES
+                } else {
+                    1
+                }
+            };
+            let (mut planes, len) =
+                self.tangent_planes(c, [samples(0, in_a), samples(1, in_b)], [ca, cb]);
+            if let Some(k) =
+                crease::clip_cell(c[0].x, c[7].x, &mut planes[..len], &mut self.scratch)
+            {
                 let it = &mut self.sums;
                 if k.volume > 0.0 {
                     it.volume += k.volume;
@@ -589,7 +644,12 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     /// `centre`), its eight corners and its six face centres: an edge through the cell has
     /// points on each of its faces' sides among them, and a corner reaching in has its faces'
     /// nearest points.
-    fn tangent_planes(&self, c: &[Vert; 8], samples: [usize; 2], centre: [Real; 2]) -> ([Plane; 2 * SAMPLES], usize) {
+    fn tangent_planes(
+        &self,
+        c: &[Vert; 8],
+        samples: [usize; 2],
+        centre: [Real; 2],
+    ) -> ([Plane; 2 * SAMPLES], usize) {
         let mid = (c[0].x + c[7].x) * 0.5;
         let mut points = [(mid, centre); SAMPLES];
         for (i, v) in c.iter().enumerate() {
@@ -615,7 +675,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 // Only planes that cut the cell, each once per body (a flat face is seen from
                 // many points): the same set whichever body is called A.
                 let plane = Plane { n: g, h: g.dot(x) - d[s], body: s };
-                let same = |q: &Plane| q.body == s && (q.n - plane.n).length() <= 1e-12 && (q.h - plane.h).abs() <= tol;
+                let same = |q: &Plane| {
+                    q.body == s && (q.n - plane.n).length() <= 1e-12 && (q.h - plane.h).abs() <= tol
+                };
                 if crease::cuts(&plane, c[0].x, c[7].x, tol) && !planes[..len].iter().any(same) {
                     planes[len] = plane;
                     len += 1;

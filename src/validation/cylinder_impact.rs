@@ -7,7 +7,9 @@
 
 use std::time::Instant;
 
-use rapier3d_f64::prelude::{ColliderBuilder, MassProperties, PhysicsWorld, RigidBodyBuilder, SharedShape};
+use rapier3d_f64::prelude::{
+    ColliderBuilder, MassProperties, PhysicsWorld, RigidBodyBuilder, SharedShape,
+};
 
 use crate::error::Result;
 use crate::material::Material;
@@ -64,13 +66,18 @@ pub fn simulate(theta_deg: Real, settings: OverlapSettings) -> Result<Rebound> {
 
 /// [`simulate`] with geometry reuse at `reuse` (0: every sub-step evaluates the contact in
 /// full; see [`DiscreteContacts::with_geometry_reuse`]).
-pub fn simulate_with_reuse(theta_deg: Real, settings: OverlapSettings, reuse: Real) -> Result<Rebound> {
+pub fn simulate_with_reuse(
+    theta_deg: Real,
+    settings: OverlapSettings,
+    reuse: Real,
+) -> Result<Rebound> {
     let start = Instant::now();
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::ZERO;
     world.integration_parameters.dt = DT;
     let wall = world.insert_body(RigidBodyBuilder::fixed());
-    let wall_collider = world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(wall));
+    let wall_collider =
+        world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(wall));
     // Axis (parry's y) tilted by θ about z: θ = 0 puts the flat face parallel to the wall.
     let theta = theta_deg.to_radians();
     let rotation = Rotation::from_rotation_z(theta);
@@ -86,9 +93,12 @@ pub fn simulate_with_reuse(theta_deg: Real, settings: OverlapSettings, reuse: Re
             ))
             .can_sleep(false),
     );
-    let cyl = world.insert_collider(ColliderBuilder::cylinder(HEIGHT / 2.0, RADIUS).density(0.0), Some(body));
+    let cyl = world
+        .insert_collider(ColliderBuilder::cylinder(HEIGHT / 2.0, RADIUS).density(0.0), Some(body));
     let material = Material::new(5e8, 0.35)?;
-    let mut contacts = DiscreteContacts::new(settings, RESTITUTION)?.with_policy(StepPolicy::Fixed { substeps: SUBSTEPS }).with_geometry_reuse(reuse)?;
+    let mut contacts = DiscreteContacts::new(settings, RESTITUTION)?
+        .with_policy(StepPolicy::Fixed { substeps: SUBSTEPS })
+        .with_geometry_reuse(reuse)?;
     contacts.handle(&mut world, wall_collider, material)?;
     contacts.handle(&mut world, cyl, material)?;
     let mut touched = false;
@@ -102,5 +112,9 @@ pub fn simulate_with_reuse(theta_deg: Real, settings: OverlapSettings, reuse: Re
     }
     let rb = &world.bodies[body];
     // A rim point left of the centre (lever > 0) spins the cylinder about -z.
-    Ok(Rebound { v_ratio: rb.linvel().y, omega_r_ratio: -RADIUS * rb.angvel().z, wall_time_s: start.elapsed().as_secs_f64() })
+    Ok(Rebound {
+        v_ratio: rb.linvel().y,
+        omega_r_ratio: -RADIUS * rb.angvel().z,
+        wall_time_s: start.elapsed().as_secs_f64(),
+    })
 }

@@ -34,12 +34,18 @@ pub fn rubber() -> Result<Material> {
 /// `substeps_per_contact` sub-steps per Hertz contact time, automatic sub-stepping. Hand it
 /// the colliders with `handle_all(&mut world, rubber()?)`.
 pub fn discrete_contacts(n_c: usize, substeps_per_contact: Real) -> Result<DiscreteContacts> {
-    discrete_contacts_with(OverlapSettings::new(n_c, IntegrationMode::Subcell)?, substeps_per_contact)
+    discrete_contacts_with(
+        OverlapSettings::new(n_c, IntegrationMode::Subcell)?,
+        substeps_per_contact,
+    )
 }
 
 /// [`discrete_contacts`] with any overlap settings (the example's `--exact` adds the exact forms
 /// for sphere and polyhedron pairs).
-pub fn discrete_contacts_with(overlap: OverlapSettings, substeps_per_contact: Real) -> Result<DiscreteContacts> {
+pub fn discrete_contacts_with(
+    overlap: OverlapSettings,
+    substeps_per_contact: Real,
+) -> Result<DiscreteContacts> {
     Ok(DiscreteContacts::new(overlap, RESTITUTION)?
         .with_friction(Friction::new(0.5, 0.4, 0.01)?)
         .with_substeps_per_contact(substeps_per_contact)?
@@ -71,17 +77,33 @@ pub fn bin_scene(n: usize) -> BinScene {
 
     // The bin: floor and four walls on one fixed body.
     let bin = world.insert_body(RigidBodyBuilder::fixed());
-    let rapier_material = |c: ColliderBuilder| c.friction(RAPIER_FRICTION).restitution(RAPIER_RESTITUTION);
-    world.insert_collider(rapier_material(ColliderBuilder::new(SharedShape::halfspace(Vector::Y))), Some(bin));
+    let rapier_material =
+        |c: ColliderBuilder| c.friction(RAPIER_FRICTION).restitution(RAPIER_RESTITUTION);
+    world.insert_collider(
+        rapier_material(ColliderBuilder::new(SharedShape::halfspace(Vector::Y))),
+        Some(bin),
+    );
     let (t, h) = (0.01, 0.3);
-    for (x, z, hx, hz) in [(half_width + t, 0.0, t, half_width + 2.0 * t), (-half_width - t, 0.0, t, half_width + 2.0 * t), (0.0, half_width + t, half_width, t), (0.0, -half_width - t, half_width, t)] {
-        world.insert_collider(rapier_material(ColliderBuilder::cuboid(hx, h, hz)).translation(Vector::new(x, h, z)), Some(bin));
+    for (x, z, hx, hz) in [
+        (half_width + t, 0.0, t, half_width + 2.0 * t),
+        (-half_width - t, 0.0, t, half_width + 2.0 * t),
+        (0.0, half_width + t, half_width, t),
+        (0.0, -half_width - t, half_width, t),
+    ] {
+        world.insert_collider(
+            rapier_material(ColliderBuilder::cuboid(hx, h, hz)).translation(Vector::new(x, h, z)),
+            Some(bin),
+        );
     }
 
     // The see-saw: a plank hinged about z at its middle, above the floor.
     let pivot = Vector::new(0.0, 0.025, 0.0);
     let plank = world.insert_body(RigidBodyBuilder::dynamic().translation(pivot));
-    world.insert_collider(rapier_material(ColliderBuilder::cuboid(0.6 * half_width, 0.004, 0.4 * half_width)).density(DENSITY), Some(plank));
+    world.insert_collider(
+        rapier_material(ColliderBuilder::cuboid(0.6 * half_width, 0.004, 0.4 * half_width))
+            .density(DENSITY),
+        Some(plank),
+    );
     let anchor = world.insert_body(RigidBodyBuilder::fixed().translation(pivot));
     world.insert_impulse_joint(anchor, plank, RevoluteJointBuilder::new(Vector::Z));
 
@@ -102,7 +124,11 @@ pub fn bin_scene(n: usize) -> BinScene {
         let turn = Vector::new(random() - 0.5, random() - 0.5, random() - 0.5) * 2.0;
         let body = world.insert_body(
             RigidBodyBuilder::dynamic()
-                .translation(Vector::new(x + 0.2 * r * (random() - 0.5), y, z + 0.2 * r * (random() - 0.5)))
+                .translation(Vector::new(
+                    x + 0.2 * r * (random() - 0.5),
+                    y,
+                    z + 0.2 * r * (random() - 0.5),
+                ))
                 .rotation(turn),
         );
         let collider = match i % 4 {

@@ -8,11 +8,11 @@
 use std::f64::consts::FRAC_PI_2;
 
 use crate::error::Result;
+use crate::force::normal_force;
 use crate::material::{effective_modulus, Material, PairParameters, StiffnessFactor};
 use crate::math::{Pose, Real, Rotation, Vector};
 use crate::overlap::{compute_overlap, OverlapGeometry, OverlapSettings};
 use crate::shape::ConvexShape;
-use crate::force::normal_force;
 
 /// Largest indentation of the sweep (m).
 pub const MAX_INDENTATION: Real = 0.05;
@@ -93,17 +93,26 @@ impl HertzCase {
     /// Force-law parameters (frictionless, `e = 1`: the static sweep has no velocity).
     pub fn parameters(&self) -> PairParameters {
         let (a, b) = Self::materials();
-        PairParameters::new(&a, &b, 1.0).expect("valid").with_stiffness(self.stiffness()).expect("valid")
+        PairParameters::new(&a, &b, 1.0)
+            .expect("valid")
+            .with_stiffness(self.stiffness())
+            .expect("valid")
     }
 
     /// Shapes of A and B.
     pub fn shapes(&self) -> (ConvexShape, ConvexShape) {
         let ok = |s: Result<ConvexShape>| s.expect("valid case geometry");
         match *self {
-            Self::SphereHalfSpace { r } => (ok(ConvexShape::ball(r)), ok(ConvexShape::half_space(Vector::Y))),
+            Self::SphereHalfSpace { r } => {
+                (ok(ConvexShape::ball(r)), ok(ConvexShape::half_space(Vector::Y)))
+            }
             Self::SphereSphere { r1, r2 } => (ok(ConvexShape::ball(r1)), ok(ConvexShape::ball(r2))),
-            Self::Punch { r } => (ok(ConvexShape::cylinder(r, r)), ok(ConvexShape::half_space(Vector::Y))),
-            Self::CrossedCylinders { r } => (ok(ConvexShape::cylinder(4.0 * r, r)), ok(ConvexShape::cylinder(4.0 * r, r))),
+            Self::Punch { r } => {
+                (ok(ConvexShape::cylinder(r, r)), ok(ConvexShape::half_space(Vector::Y)))
+            }
+            Self::CrossedCylinders { r } => {
+                (ok(ConvexShape::cylinder(4.0 * r, r)), ok(ConvexShape::cylinder(4.0 * r, r)))
+            }
         }
     }
 
@@ -111,7 +120,9 @@ impl HertzCase {
     pub fn poses(&self, d: Real) -> (Pose, Pose) {
         let up = |h: Real| Vector::new(0.0, h - d, 0.0);
         match *self {
-            Self::SphereHalfSpace { r } | Self::Punch { r } => (Pose::from_translation(up(r)), Pose::IDENTITY),
+            Self::SphereHalfSpace { r } | Self::Punch { r } => {
+                (Pose::from_translation(up(r)), Pose::IDENTITY)
+            }
             Self::SphereSphere { r1, r2 } => (Pose::from_translation(up(r1 + r2)), Pose::IDENTITY),
             Self::CrossedCylinders { r } => (
                 Pose::from_parts(up(2.0 * r), Rotation::from_rotation_z(FRAC_PI_2)),

@@ -19,7 +19,8 @@ use parry3d_f64::query;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use rapier3d_f64::prelude::{
-    ColliderBuilder, ColliderHandle, InteractionGroups, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
+    ColliderBuilder, ColliderHandle, InteractionGroups, PhysicsWorld, RigidBodyBuilder,
+    RigidBodyHandle, SharedShape,
 };
 
 use crate::coupling::{Fluid, FluidSettings, FluidStepReport, ForceMethod};
@@ -30,7 +31,9 @@ use crate::overlap::{IntegrationMode, OverlapSettings};
 use crate::periodic::PeriodicBox;
 use crate::rapier::{DiscreteContacts, StepPolicy};
 use crate::tangential::TangentialLaw;
-use hlbm::correlations::{garside_al_dibouni_exponent, richardson_zaki_exponent, schiller_naumann_terminal_velocity};
+use hlbm::correlations::{
+    garside_al_dibouni_exponent, richardson_zaki_exponent, schiller_naumann_terminal_velocity,
+};
 
 /// Standard gravity (m/s²).
 const G: Real = 9.81;
@@ -206,7 +209,11 @@ impl HinderedSettling {
     fn check(&self) -> Result<()> {
         let bad = |name, value, allowed| Err(Error::InvalidParameter { name, value, allowed });
         if !(self.volume_fraction > 0.0 && self.volume_fraction <= 0.35) {
-            return bad("volume_fraction", self.volume_fraction, "0 < phi <= 0.35 (random placement)");
+            return bad(
+                "volume_fraction",
+                self.volume_fraction,
+                "0 < phi <= 0.35 (random placement)",
+            );
         }
         if !(self.density_ratio > 1.0 && self.density_ratio.is_finite()) {
             return bad("density_ratio", self.density_ratio, "> 1 (the particles settle)");
@@ -224,10 +231,18 @@ impl HinderedSettling {
             return bad("diameter", self.diameter, "> 0 m, finite");
         }
         if !(self.nodes_per_diameter >= 2.0 && self.nodes_per_diameter.is_finite()) {
-            return bad("nodes_per_diameter", self.nodes_per_diameter, ">= 2 lattice nodes per diameter");
+            return bad(
+                "nodes_per_diameter",
+                self.nodes_per_diameter,
+                ">= 2 lattice nodes per diameter",
+            );
         }
         if self.particle_count() == 0 {
-            return bad("volume_fraction", self.volume_fraction, "enough for at least one particle in the box (or a larger box_nodes)");
+            return bad(
+                "volume_fraction",
+                self.volume_fraction,
+                "enough for at least one particle in the box (or a larger box_nodes)",
+            );
         }
         Ok(())
     }
@@ -295,14 +310,19 @@ pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(case.seed);
     // A cell list of the placed particles, cells at least one bounding diameter wide.
     let cells = ((l / (2.0 * radius + gap)).floor() as usize).max(1);
-    let cell_of = |p: Vector| -> [usize; 3] { std::array::from_fn(|d| ((p[d] / l * cells as Real) as usize).min(cells - 1)) };
+    let cell_of = |p: Vector| -> [usize; 3] {
+        std::array::from_fn(|d| ((p[d] / l * cells as Real) as usize).min(cells - 1))
+    };
     let index = |c: [usize; 3]| (c[2] * cells + c[1]) * cells + c[0];
     // Whether `pose` keeps the gap to every particle placed so far.
     let free = |pose: &Pose, placed: &[Pose], grid: &[Vec<usize>]| {
         let centre = pose.translation;
         let c = cell_of(centre);
         let span = |d: usize| -> Vec<usize> {
-            let mut v: Vec<usize> = [-1i64, 0, 1].iter().map(|o| (c[d] as i64 + o).rem_euclid(cells as i64) as usize).collect();
+            let mut v: Vec<usize> = [-1i64, 0, 1]
+                .iter()
+                .map(|o| (c[d] as i64 + o).rem_euclid(cells as i64) as usize)
+                .collect();
             v.sort_unstable();
             v.dedup();
             v
@@ -315,7 +335,9 @@ pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
                         other.translation += domain.nearest_image_shift(centre, other.translation);
                         let d = (other.translation - centre).length();
                         d > 2.0 * radius + gap
-                            || (case.shape == ParticleShape::Cube && query::distance(pose, shape.as_ref(), &other, shape.as_ref()).is_ok_and(|d| d.distance > gap))
+                            || (case.shape == ParticleShape::Cube
+                                && query::distance(pose, shape.as_ref(), &other, shape.as_ref())
+                                    .is_ok_and(|d| d.distance > gap))
                     })
                 })
             })
@@ -333,7 +355,11 @@ pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
     let mut placed: Vec<Pose> = Vec::with_capacity(n);
     'rsa: for _ in 0..n {
         for _ in 0..tries {
-            let centre = Vector::new(rng.random::<Real>() * l, rng.random::<Real>() * l, rng.random::<Real>() * l);
+            let centre = Vector::new(
+                rng.random::<Real>() * l,
+                rng.random::<Real>() * l,
+                rng.random::<Real>() * l,
+            );
             let pose = Pose::from_parts(centre, orientation(&mut rng));
             if free(&pose, &placed, &grid) {
                 grid[index(cell_of(centre))].push(placed.len());
@@ -347,10 +373,17 @@ pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
         let k = (1..).find(|k| 4 * k * k * k >= n).unwrap_or(1);
         let fcc = l / k as Real / std::f64::consts::SQRT_2 > l / m as Real;
         // Cell `c` of an `a × a × a` split of the box, as its corner in cell widths.
-        let corner = |c: usize, a: usize| Vector::new((c % a) as Real, ((c / a) % a) as Real, (c / (a * a)) as Real);
+        let corner = |c: usize, a: usize| {
+            Vector::new((c % a) as Real, ((c / a) % a) as Real, (c / (a * a)) as Real)
+        };
         let mut sites: Vec<Vector> = if fcc {
-            let basis = [[0.25, 0.25, 0.25], [0.75, 0.75, 0.25], [0.75, 0.25, 0.75], [0.25, 0.75, 0.75]];
-            (0..k * k * k).flat_map(|c| basis.map(|b| (corner(c, k) + Vector::from_array(b)) * (l / k as Real))).collect()
+            let basis =
+                [[0.25, 0.25, 0.25], [0.75, 0.75, 0.25], [0.75, 0.25, 0.75], [0.25, 0.75, 0.75]];
+            (0..k * k * k)
+                .flat_map(|c| {
+                    basis.map(|b| (corner(c, k) + Vector::from_array(b)) * (l / k as Real))
+                })
+                .collect()
         } else {
             (0..m * m * m).map(|c| (corner(c, m) + Vector::splat(0.5)) * (l / m as Real)).collect()
         };
@@ -364,7 +397,10 @@ pub fn place_particles(case: &HinderedSettling, n: usize) -> Result<Vec<Pose>> {
                 break;
             }
             // A site its placed neighbours leave no room at stays empty (there are spares).
-            if let Some(pose) = (0..200).map(|_| Pose::from_parts(centre, orientation(&mut rng))).find(|p| free(p, &placed, &grid)) {
+            if let Some(pose) = (0..200)
+                .map(|_| Pose::from_parts(centre, orientation(&mut rng)))
+                .find(|p| free(p, &placed, &grid))
+            {
                 grid[index(cell_of(centre))].push(placed.len());
                 placed.push(pose);
             }
@@ -455,8 +491,9 @@ impl SettlingRun {
         }
         let l = case.box_length();
         let dx = case.dx();
-        let settings =
-            FluidSettings::new(dx, case.dt(), case.viscosity(), case.fluid_density)?.with_smoothing(case.smoothing_cells * dx)?.with_force_method(case.force_method);
+        let settings = FluidSettings::new(dx, case.dt(), case.viscosity(), case.fluid_density)?
+            .with_smoothing(case.smoothing_cells * dx)?
+            .with_force_method(case.force_method);
         let mut fluid = Fluid::new(Vector::ZERO, Vector::splat(l), [true; 3], settings)?;
         for &(_, c) in &particles {
             fluid.couple(&world, c)?;
@@ -464,7 +501,10 @@ impl SettlingRun {
         fluid.balance_weight(&world)?;
         let contacts = if case.contacts {
             let half = 0.5 * case.enlargement_cells * dx;
-            let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(half, half)?.with_closed_form_spheres(case.closed_form_spheres).with_exact_polyhedra(case.exact_polyhedra);
+            let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?
+                .with_enlargement(half, half)?
+                .with_closed_form_spheres(case.closed_form_spheres)
+                .with_exact_polyhedra(case.exact_polyhedra);
             let mut c = DiscreteContacts::new(overlap, case.restitution)?
                 .with_friction(case.friction)
                 // The seed's friction law, for the comparison with its runs.
@@ -550,7 +590,9 @@ impl SettlingRun {
             // lattice's (all nodes) less the nodes inside particles.
             let case = &self.case;
             let n = self.particles.len() as Real;
-            let vp = self.particles.iter().map(|&(b, _)| self.world.bodies[b].linvel().z).sum::<Real>() / n;
+            let vp =
+                self.particles.iter().map(|&(b, _)| self.world.bodies[b].linvel().z).sum::<Real>()
+                    / n;
             let v_box = case.box_length().powi(3);
             let v_solid = n * self.volume;
             let u_mean = self.fluid.mean_velocity().z;
@@ -582,9 +624,12 @@ impl SettlingRun {
         r.v_mean_over_vs = tail.iter().map(|s| s.1).sum::<Real>() / tail.len().max(1) as Real;
         // The momentum's slope over the same window, as a force over the net weight:
         // ΔP / (N m_p v_s) over (1 − ρ_f/ρ_p) g Δt / v_s.
-        if let (Some(&(t0, _)), Some(&(t1, _)), Some(&p0), Some(&p1)) = (tail.first(), tail.last(), r.momentum.get(first), r.momentum.last()) {
+        if let (Some(&(t0, _)), Some(&(t1, _)), Some(&p0), Some(&p1)) =
+            (tail.first(), tail.last(), r.momentum.get(first), r.momentum.last())
+        {
             if t1 > t0 {
-                r.momentum_imbalance = (p1 - p0) / ((1.0 - 1.0 / case.density_ratio) * G * (t1 - t0) / case.terminal_velocity());
+                r.momentum_imbalance = (p1 - p0)
+                    / ((1.0 - 1.0 / case.density_ratio) * G * (t1 - t0) / case.terminal_velocity());
             }
         }
         self.result
@@ -612,11 +657,19 @@ impl SettlingRun {
 }
 
 /// Runs `case`, calling `progress` after every step.
-pub fn run(case: &HinderedSettling, mut progress: impl FnMut(Progress<'_>)) -> Result<SettlingResult> {
+pub fn run(
+    case: &HinderedSettling,
+    mut progress: impl FnMut(Progress<'_>),
+) -> Result<SettlingResult> {
     let mut run = SettlingRun::new(case)?;
     while !run.is_done() {
         let report = run.step()?;
-        progress(Progress { step: run.steps_done(), steps: run.result.steps, report: &report, v_over_vs: run.latest });
+        progress(Progress {
+            step: run.steps_done(),
+            steps: run.result.steps,
+            report: &report,
+            v_over_vs: run.latest,
+        });
     }
     Ok(run.finish())
 }

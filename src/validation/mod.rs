@@ -1,18 +1,18 @@
 //! Validation cases with analytical solutions, shared by the examples and the tests.
 
-pub mod hertz;
 #[cfg(feature = "rapier")]
 pub mod cylinder_impact;
 #[cfg(feature = "rapier")]
-pub mod stability;
+pub mod drop_in;
+pub mod hertz;
+#[cfg(feature = "fluid")]
+pub mod hindered_settling;
 #[cfg(feature = "rapier")]
 pub mod precision;
 #[cfg(feature = "rapier")]
-pub mod drop_in;
+pub mod stability;
 #[cfg(feature = "fluid")]
 pub mod wet_rebound;
-#[cfg(feature = "fluid")]
-pub mod hindered_settling;
 
 /// Loads a validation run saved under `kind` and checks that it holds `case`: the one rule
 /// behind every resumable run's `load`. Another case is refused with
@@ -28,7 +28,11 @@ pub(crate) fn resume<R: serde::de::DeserializeOwned, C: PartialEq>(
 ) -> crate::Result<R> {
     let run: R = crate::checkpoint::load(path, kind)?;
     if case_of(&run) != case {
-        return Err(crate::Error::InvalidParameter { name: "case", value: crate::math::Real::NAN, allowed });
+        return Err(crate::Error::InvalidParameter {
+            name: "case",
+            value: crate::math::Real::NAN,
+            allowed,
+        });
     }
     Ok(run)
 }

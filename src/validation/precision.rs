@@ -7,7 +7,9 @@
 //! a sub-step moves a body by `v Δt_sub`, and once that is below the f32 spacing of its
 //! coordinates (1.2e-7 m at 1 m) the body's position stops changing.
 
-use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape};
+use rapier3d_f64::prelude::{
+    ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
+};
 
 use crate::error::Result;
 use crate::material::{effective_modulus, hertz_contact_time, Material};
@@ -69,10 +71,16 @@ impl Impact {
         world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(wall));
         // Four sub-steps of flight before the touch.
         let start = o + Vector::new(0.0, r + 4.0 * self.speed * dt, 0.0);
-        let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(start).linvel(Vector::new(0.0, -self.speed, 0.0)).can_sleep(false));
+        let ball = world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .translation(start)
+                .linvel(Vector::new(0.0, -self.speed, 0.0))
+                .can_sleep(false),
+        );
         world.insert_collider(ColliderBuilder::ball(r).density(density), Some(ball));
         let settings = OverlapSettings::new(4, IntegrationMode::Subcell)?;
-        let mut contacts = DiscreteContacts::new(settings, e)?.with_policy(StepPolicy::Fixed { substeps: 1 });
+        let mut contacts =
+            DiscreteContacts::new(settings, e)?.with_policy(StepPolicy::Fixed { substeps: 1 });
         contacts.handle_all(&mut world, material)?;
         if f32_state {
             round_to_f32(&mut world, ball);
@@ -103,7 +111,8 @@ fn round_to_f32(world: &mut PhysicsWorld, h: RigidBodyHandle) {
     let rb = &mut world.bodies[h];
     let p = *rb.position();
     let q = p.rotation;
-    let pose = Pose::from_parts(v3(p.translation), Rotation::from_xyzw(f(q.x), f(q.y), f(q.z), f(q.w)));
+    let pose =
+        Pose::from_parts(v3(p.translation), Rotation::from_xyzw(f(q.x), f(q.y), f(q.z), f(q.w)));
     rb.set_position(pose, false);
     let (linvel, angvel) = (v3(rb.linvel()), v3(rb.angvel()));
     rb.set_linvel(linvel, false);

@@ -5,7 +5,9 @@
 
 use std::time::Instant;
 
-use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape};
+use rapier3d_f64::prelude::{
+    ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
+};
 
 use crate::error::{Error, Result};
 use crate::material::{effective_modulus, Material};
@@ -86,9 +88,19 @@ impl Case {
                 }
             }
         }
-        v.extend([Case::MassRatio { ratio: 1.0 }, Case::MassRatio { ratio: 1000.0 }, Case::Grazing, Case::ThinPlate]);
+        v.extend([
+            Case::MassRatio { ratio: 1.0 },
+            Case::MassRatio { ratio: 1000.0 },
+            Case::Grazing,
+            Case::ThinPlate,
+        ]);
         v.extend([Case::Resting { steps: 100_000, dt: 1e-4 }, Case::RefusedStep]);
-        v.extend([Case::Ramp { seconds: 2.0 }, Case::Ramp { seconds: 10.0 }, Case::Pyramid { seconds: 2.0 }, Case::Pyramid { seconds: 10.0 }]);
+        v.extend([
+            Case::Ramp { seconds: 2.0 },
+            Case::Ramp { seconds: 10.0 },
+            Case::Pyramid { seconds: 2.0 },
+            Case::Pyramid { seconds: 10.0 },
+        ]);
         v
     }
 
@@ -101,7 +113,9 @@ impl Case {
             Case::MassRatio { ratio } => format!("sphere–sphere m_A/m_B={ratio} (|e_meas/e - 1|)"),
             Case::Grazing => "grazing hit 89° (|e_n/e - 1|)".into(),
             Case::ThinPlate => "thin plate 50:50:1 flat (|e_meas/e - 1|)".into(),
-            Case::Resting { steps, dt } => format!("resting sphere {steps} steps of {dt:e} s (drift m; indentation vs Hertz)"),
+            Case::Resting { steps, dt } => {
+                format!("resting sphere {steps} steps of {dt:e} s (drift m; indentation vs Hertz)")
+            }
             Case::RefusedStep => "E=2e11 v=30 with 1 fixed sub-step (must refuse)".into(),
             Case::Ramp { seconds } => format!("box on a 20° ramp μ_s=0.5, {seconds} s (drift m)"),
             Case::Pyramid { seconds } => format!("10-box pyramid, {seconds} s (top box drift m)"),
@@ -114,20 +128,36 @@ impl Case {
         let result = self.run_inner();
         let wall_time_s = start.elapsed().as_secs_f64();
         match (self, result) {
-            (Case::RefusedStep, Err(Error::TimeStepTooLarge { substeps_needed, .. })) => {
-                Outcome { verdict: "refused".into(), error: 0.0, substeps: substeps_needed, wall_time_s }
+            (Case::RefusedStep, Err(Error::TimeStepTooLarge { substeps_needed, .. })) => Outcome {
+                verdict: "refused".into(),
+                error: 0.0,
+                substeps: substeps_needed,
+                wall_time_s,
+            },
+            (Case::RefusedStep, other) => Outcome {
+                verdict: format!("FAILED: not refused ({other:?})"),
+                error: Real::NAN,
+                substeps: 0,
+                wall_time_s,
+            },
+            (_, Ok((verdict, error, substeps))) => {
+                Outcome { verdict, error, substeps, wall_time_s }
             }
-            (Case::RefusedStep, other) => {
-                Outcome { verdict: format!("FAILED: not refused ({other:?})"), error: Real::NAN, substeps: 0, wall_time_s }
-            }
-            (_, Ok((verdict, error, substeps))) => Outcome { verdict, error, substeps, wall_time_s },
-            (_, Err(Error::TimeStepTooLarge { substeps_needed, .. })) => {
-                Outcome { verdict: "refused".into(), error: 0.0, substeps: substeps_needed, wall_time_s }
-            }
+            (_, Err(Error::TimeStepTooLarge { substeps_needed, .. })) => Outcome {
+                verdict: "refused".into(),
+                error: 0.0,
+                substeps: substeps_needed,
+                wall_time_s,
+            },
             (_, Err(Error::ContactTooSoft { indentation, .. })) => {
                 Outcome { verdict: "refused".into(), error: indentation, substeps: 0, wall_time_s }
             }
-            (_, Err(e)) => Outcome { verdict: format!("FAILED: {e}"), error: Real::NAN, substeps: 0, wall_time_s },
+            (_, Err(e)) => Outcome {
+                verdict: format!("FAILED: {e}"),
+                error: Real::NAN,
+                substeps: 0,
+                wall_time_s,
+            },
         }
     }
 
@@ -139,13 +169,21 @@ impl Case {
         world.integration_parameters.dt = 1e-4;
         let wall = world.insert_body(RigidBodyBuilder::fixed());
         world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(wall));
-        let sphere = |world: &mut PhysicsWorld, y: Real, v: Vector, density: Real| -> RigidBodyHandle {
-            let b = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, y, 0.0)).linvel(v).can_sleep(false));
-            world.insert_collider(ColliderBuilder::ball(r).density(density), Some(b));
-            b
-        };
+        let sphere =
+            |world: &mut PhysicsWorld, y: Real, v: Vector, density: Real| -> RigidBodyHandle {
+                let b = world.insert_body(
+                    RigidBodyBuilder::dynamic()
+                        .translation(Vector::new(0.0, y, 0.0))
+                        .linvel(v)
+                        .can_sleep(false),
+                );
+                world.insert_collider(ColliderBuilder::ball(r).density(density), Some(b));
+                b
+            };
         let (e, youngs, policy) = match *self {
-            Case::NormalImpact { youngs, restitution, .. } => (restitution, youngs, StepPolicy::AutoSubstep { max_substeps: 100_000 }),
+            Case::NormalImpact { youngs, restitution, .. } => {
+                (restitution, youngs, StepPolicy::AutoSubstep { max_substeps: 100_000 })
+            }
             Case::RefusedStep => (0.85, 2e11, StepPolicy::Fixed { substeps: 1 }),
             _ => (0.85, 5e8, StepPolicy::AutoSubstep { max_substeps: 100_000 }),
         };
@@ -157,9 +195,11 @@ impl Case {
         };
         // (body, normal along which the rebound is measured, approach speed along it)
         let (body, normal, v_n) = match *self {
-            Case::NormalImpact { .. } | Case::RefusedStep => {
-                (sphere(&mut world, r + 1e-6, Vector::new(0.0, -speed_in, 0.0), 7800.0), Vector::Y, speed_in)
-            }
+            Case::NormalImpact { .. } | Case::RefusedStep => (
+                sphere(&mut world, r + 1e-6, Vector::new(0.0, -speed_in, 0.0), 7800.0),
+                Vector::Y,
+                speed_in,
+            ),
             Case::Grazing => {
                 let a = 89f64.to_radians();
                 let v = Vector::new(a.sin(), -a.cos(), 0.0);
@@ -167,10 +207,17 @@ impl Case {
             }
             Case::MassRatio { ratio } => {
                 // Free space: B at rest far from the wall, A coming at 1 m/s along -x.
-                let b = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 0.0)).can_sleep(false));
+                let b = world.insert_body(
+                    RigidBodyBuilder::dynamic()
+                        .translation(Vector::new(0.0, 1.0, 0.0))
+                        .can_sleep(false),
+                );
                 world.insert_collider(ColliderBuilder::ball(r).density(7800.0), Some(b));
                 let a = world.insert_body(
-                    RigidBodyBuilder::dynamic().translation(Vector::new(2.0 * r + 1e-6, 1.0, 0.0)).linvel(Vector::new(-1.0, 0.0, 0.0)).can_sleep(false),
+                    RigidBodyBuilder::dynamic()
+                        .translation(Vector::new(2.0 * r + 1e-6, 1.0, 0.0))
+                        .linvel(Vector::new(-1.0, 0.0, 0.0))
+                        .can_sleep(false),
                 );
                 world.insert_collider(ColliderBuilder::ball(r).density(7800.0 * ratio), Some(a));
                 contacts.handle_all(&mut world, Material::new(youngs, 0.3)?)?;
@@ -179,11 +226,17 @@ impl Case {
             Case::ThinPlate => {
                 let b = world.insert_body(
                     RigidBodyBuilder::dynamic()
-                        .pose(Pose::from_parts(Vector::new(0.0, 0.0005 + 1e-6, 0.0), Rotation::IDENTITY))
+                        .pose(Pose::from_parts(
+                            Vector::new(0.0, 0.0005 + 1e-6, 0.0),
+                            Rotation::IDENTITY,
+                        ))
                         .linvel(Vector::new(0.0, -1.0, 0.0))
                         .can_sleep(false),
                 );
-                world.insert_collider(ColliderBuilder::cuboid(0.025, 0.0005, 0.025).density(2700.0), Some(b));
+                world.insert_collider(
+                    ColliderBuilder::cuboid(0.025, 0.0005, 0.025).density(2700.0),
+                    Some(b),
+                );
                 (b, Vector::Y, 1.0)
             }
             Case::Resting { steps, dt } => {
@@ -196,7 +249,13 @@ impl Case {
                 let mut contacts = contacts.with_geometry_reuse(0.0)?;
                 let material = Material::new(5e8, 0.3)?;
                 contacts.handle_all(&mut world, material)?;
-                return Self::resting(&mut world, &mut contacts, b, steps, effective_modulus(&material, &material));
+                return Self::resting(
+                    &mut world,
+                    &mut contacts,
+                    b,
+                    steps,
+                    effective_modulus(&material, &material),
+                );
             }
             Case::Ramp { seconds } => return Self::boxes(seconds, true),
             Case::Pyramid { seconds } => return Self::boxes(seconds, false),
@@ -222,26 +281,43 @@ impl Case {
             }
         }
         let rb = &world.bodies[body];
-        let ke1 = 0.5 * rb.mass() * rb.linvel().length_squared() + 0.5 * rb.angvel().dot(rb.angvel()) * rb.mass() * r * r * 0.4;
+        let ke1 = 0.5 * rb.mass() * rb.linvel().length_squared()
+            + 0.5 * rb.angvel().dot(rb.angvel()) * rb.mass() * r * r * 0.4;
         let e_meas = rb.linvel().dot(normal) / v_n;
         if !touched {
             return Ok(("FAILED: no contact".into(), Real::NAN, substeps));
         }
         if lowest < 0.0 {
-            return Ok((format!("FAILED: tunnelled (centre at {lowest:e} m)"), Real::NAN, substeps));
+            return Ok((
+                format!("FAILED: tunnelled (centre at {lowest:e} m)"),
+                Real::NAN,
+                substeps,
+            ));
         }
         // Sub-stepped symplectic Euler errs by O(Δt_c / t_H) per contact: with >= 30 sub-steps
         // an elastic rebound comes out up to ~0.6 % fast; more than 1 % is a failure.
         if ke1 > ke0 * (1.0 + 1e-2) {
-            return Ok((format!("FAILED: energy created ({:.3}×)", ke1 / ke0), Real::NAN, substeps));
+            return Ok((
+                format!("FAILED: energy created ({:.3}×)", ke1 / ke0),
+                Real::NAN,
+                substeps,
+            ));
         }
         let err = (e_meas / e - 1.0).abs();
-        let verdict = if err <= 0.05 { "ok".to_string() } else { format!("FAILED: e = {e_meas:.4}") };
+        let verdict =
+            if err <= 0.05 { "ok".to_string() } else { format!("FAILED: e = {e_meas:.4}") };
         Ok((verdict, err, substeps))
     }
 
-    fn two_body(world: &mut PhysicsWorld, contacts: &mut DiscreteContacts, a: RigidBodyHandle, b: RigidBodyHandle, e: Real) -> Result<(String, Real, usize)> {
-        let p0 = world.bodies[a].mass() * world.bodies[a].linvel() + world.bodies[b].mass() * world.bodies[b].linvel();
+    fn two_body(
+        world: &mut PhysicsWorld,
+        contacts: &mut DiscreteContacts,
+        a: RigidBodyHandle,
+        b: RigidBodyHandle,
+        e: Real,
+    ) -> Result<(String, Real, usize)> {
+        let p0 = world.bodies[a].mass() * world.bodies[a].linvel()
+            + world.bodies[b].mass() * world.bodies[b].linvel();
         let mut touched = false;
         let mut substeps = 0;
         for _ in 0..200_000 {
@@ -259,7 +335,11 @@ impl Case {
             return Ok((format!("FAILED: momentum {p0:?} → {p1:?}"), Real::NAN, substeps));
         }
         let err = (-e_meas / e - 1.0).abs();
-        Ok((if err <= 0.05 { "ok".into() } else { format!("FAILED: e = {:.4}", -e_meas) }, err, substeps))
+        Ok((
+            if err <= 0.05 { "ok".into() } else { format!("FAILED: e = {:.4}", -e_meas) },
+            err,
+            substeps,
+        ))
     }
 
     /// The ramp (`ramp`) or the pyramid, left standing for `seconds` at 240 steps per second
@@ -277,22 +357,33 @@ impl Case {
         };
         let watched = if ramp {
             let tilt = Rotation::from_rotation_z(20f64.to_radians());
-            world.insert_collider(ColliderBuilder::cuboid(1.0, 0.1, 0.5).position(Pose::from_parts(Vector::ZERO, tilt)), Some(fixed));
+            world.insert_collider(
+                ColliderBuilder::cuboid(1.0, 0.1, 0.5)
+                    .position(Pose::from_parts(Vector::ZERO, tilt)),
+                Some(fixed),
+            );
             add_box(&mut world, Pose::from_parts(tilt * Vector::new(0.0, 0.1 + h, 0.0), tilt))
         } else {
-            world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(fixed));
+            world.insert_collider(
+                ColliderBuilder::new(SharedShape::halfspace(Vector::Y)),
+                Some(fixed),
+            );
             let mut top = None;
             for row in 0..4 {
                 for i in 0..4 - row {
                     let x = (i as Real - 0.5 * (3 - row) as Real) * (BOX + 1e-3);
-                    top = Some(add_box(&mut world, Pose::from_translation(Vector::new(x, h + row as Real * BOX, 0.0))));
+                    top = Some(add_box(
+                        &mut world,
+                        Pose::from_translation(Vector::new(x, h + row as Real * BOX, 0.0)),
+                    ));
                 }
             }
             top.expect("four rows")
         };
-        let mut contacts = DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell)?, 0.5)?
-            .with_friction(crate::material::Friction::new(0.5, 0.4, 0.01)?)
-            .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
+        let mut contacts =
+            DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell)?, 0.5)?
+                .with_friction(crate::material::Friction::new(0.5, 0.4, 0.01)?)
+                .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
         contacts.handle_all(&mut world, Material::new(1e7, 0.45)?)?;
         let steps = (seconds * 240.0).round() as usize;
         let (mut substeps, mut settled) = (0, None);
@@ -310,12 +401,19 @@ impl Case {
         // Held: creeping below 1 mm/s after settling. Nassauer & Kuna's slip-speed law fails it
         // on the ramp (about 7 mm/s); rapier's own contacts hold the ramp's box to 0.03 mm/s.
         let creep = drift / (seconds - 0.5);
-        let verdict = if creep < 1e-3 { "ok".to_string() } else { format!("FAILED: creeps {creep:e} m/s") };
+        let verdict =
+            if creep < 1e-3 { "ok".to_string() } else { format!("FAILED: creeps {creep:e} m/s") };
         Ok((verdict, drift, substeps))
     }
 
     /// The sphere `b` (`e_star` against the floor) left resting for `steps` steps.
-    fn resting(world: &mut PhysicsWorld, contacts: &mut DiscreteContacts, b: RigidBodyHandle, steps: usize, e_star: Real) -> Result<(String, Real, usize)> {
+    fn resting(
+        world: &mut PhysicsWorld,
+        contacts: &mut DiscreteContacts,
+        b: RigidBodyHandle,
+        steps: usize,
+        e_star: Real,
+    ) -> Result<(String, Real, usize)> {
         let mut substeps = 0;
         let mut y_half = 0.0;
         let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
@@ -335,16 +433,22 @@ impl Case {
         let drift = (rb.translation().y - y_half).abs().max(hi - lo).max(rb.translation().x.abs());
         // The static Hertz indentation under the sphere's weight, d = (3 m g / (4 E* √R))^(2/3).
         let r = RADIUS;
-        let d_hertz = (3.0 * rb.mass() * world.gravity.length() / (4.0 * e_star * Real::sqrt(r))).powf(2.0 / 3.0);
+        let d_hertz = (3.0 * rb.mass() * world.gravity.length() / (4.0 * e_star * Real::sqrt(r)))
+            .powf(2.0 / 3.0);
         let d = r - rb.translation().y;
         // Tolerances: drift or jitter over the second half below 1 % of the static indentation
         // (1.3 µm here), the indentation itself within 5 % of Hertz (sub-cell N_c = 4 errs by
         // ~3 % on a sphere), and at rest.
-        let ok = drift < 0.01 * d_hertz && (d / d_hertz - 1.0).abs() < 0.05 && rb.linvel().length() < 1e-6;
+        let ok = drift < 0.01 * d_hertz
+            && (d / d_hertz - 1.0).abs() < 0.05
+            && rb.linvel().length() < 1e-6;
         let verdict = if ok {
             "ok".into()
         } else {
-            format!("FAILED: drift {drift:e} m, indentation {d:e} m (Hertz {d_hertz:e}), |v| {:e}", rb.linvel().length())
+            format!(
+                "FAILED: drift {drift:e} m, indentation {d:e} m (Hertz {d_hertz:e}), |v| {:e}",
+                rb.linvel().length()
+            )
         };
         Ok((verdict, drift, substeps))
     }

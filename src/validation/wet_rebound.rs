@@ -7,7 +7,9 @@
 
 use std::time::Instant;
 
-use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape};
+use rapier3d_f64::prelude::{
+    ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
+};
 
 use crate::coupling::{Fluid, FluidSettings, ForceMethod};
 use crate::error::Result;
@@ -89,7 +91,8 @@ impl WetRebound {
 
     /// Stokes number `St = (ρ_p + ρ_f/2) U D / (9 μ)` at impact speed `u` (added mass included).
     pub fn stokes_number(&self, u: Real) -> Real {
-        (self.particle_density + 0.5 * self.fluid_density) * u * 2.0 * self.radius / (9.0 * self.viscosity)
+        (self.particle_density + 0.5 * self.fluid_density) * u * 2.0 * self.radius
+            / (9.0 * self.viscosity)
     }
 
     /// Legendre et al. (2006): `e_wet / e_dry = exp(−35 / St)`.
@@ -140,8 +143,13 @@ impl Trajectory {
             (a.2 + s * (b.2 - a.2)).abs()
         };
         let pairs = || self.samples.windows(2);
-        let down = pairs().find(|w| w[0].1 > level && w[1].1 <= level && w[1].0 <= t_impact + 1e-12).map(|w| cross(&w[0], &w[1]))?;
-        let up = pairs().find(|w| w[0].0 > t_impact && w[0].1 < level && w[1].1 >= level).map(|w| cross(&w[0], &w[1])).unwrap_or(0.0);
+        let down = pairs()
+            .find(|w| w[0].1 > level && w[1].1 <= level && w[1].0 <= t_impact + 1e-12)
+            .map(|w| cross(&w[0], &w[1]))?;
+        let up = pairs()
+            .find(|w| w[0].0 > t_impact && w[0].1 < level && w[1].1 >= level)
+            .map(|w| cross(&w[0], &w[1]))
+            .unwrap_or(0.0);
         Some((down, up))
     }
 
@@ -181,12 +189,20 @@ impl ReboundRun {
         let r = case.radius;
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::new(0.0, 0.0, -9.81);
-        let centre = Vector::new(0.5 * case.box_size.x, 0.5 * case.box_size.y, r + case.release_gap);
+        let centre =
+            Vector::new(0.5 * case.box_size.x, 0.5 * case.box_size.y, r + case.release_gap);
         let body = world.insert_body(RigidBodyBuilder::dynamic().translation(centre));
-        let sphere = world.insert_collider(ColliderBuilder::ball(r).density(case.particle_density), Some(body));
+        let sphere = world
+            .insert_collider(ColliderBuilder::ball(r).density(case.particle_density), Some(body));
 
-        let settings =
-            FluidSettings::new(case.dx, case.dt, case.viscosity / case.fluid_density, case.fluid_density)?.with_smoothing(case.smoothing)?.with_force_method(case.force_method);
+        let settings = FluidSettings::new(
+            case.dx,
+            case.dt,
+            case.viscosity / case.fluid_density,
+            case.fluid_density,
+        )?
+        .with_smoothing(case.smoothing)?
+        .with_force_method(case.force_method);
         let mut fluid = Fluid::closed_box(Vector::ZERO, case.box_size, settings)?;
         fluid.couple(&world, sphere)?;
 
@@ -201,11 +217,15 @@ impl ReboundRun {
                 (-Vector::X, case.box_size),
                 (-Vector::Y, case.box_size),
             ] {
-                colliders.push(world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(normal)).translation(at), Some(walls)));
+                colliders.push(world.insert_collider(
+                    ColliderBuilder::new(SharedShape::halfspace(normal)).translation(at),
+                    Some(walls),
+                ));
             }
-            let settings =
-                OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?.with_enlargement(0.5 * case.enlargement, 0.5 * case.enlargement)?;
-            let mut c = DiscreteContacts::new(settings, case.dry_restitution)?.with_policy(StepPolicy::AutoSubstep { max_substeps: 100_000 });
+            let settings = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?
+                .with_enlargement(0.5 * case.enlargement, 0.5 * case.enlargement)?;
+            let mut c = DiscreteContacts::new(settings, case.dry_restitution)?
+                .with_policy(StepPolicy::AutoSubstep { max_substeps: 100_000 });
             c.handle(&mut world, sphere, case.sphere_material)?;
             for h in colliders {
                 c.handle(&mut world, h, case.wall_material)?;
@@ -291,7 +311,8 @@ impl ReboundRun {
             self.quiet_since = None;
         }
         // Without contact the sphere sinks into the floor: stop once it is half way in.
-        self.done |= gap < -0.5 * self.case.radius || out.steps as Real >= (self.case.end_time / self.case.dt).ceil();
+        self.done |= gap < -0.5 * self.case.radius
+            || out.steps as Real >= (self.case.end_time / self.case.dt).ceil();
         out.wall_time += start.elapsed().as_secs_f64();
         Ok(())
     }

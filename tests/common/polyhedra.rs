@@ -4,8 +4,8 @@
 //! volume of (1–10 % of the smaller body's size)³ × 8 × its volume. Shared by the
 //! `polyhedra_grid` test and the `polyhedra_check` example.
 
-use discrete_contact::{compute_overlap, OverlapGeometry};
 use discrete_contact::prelude::*;
+use discrete_contact::{compute_overlap, OverlapGeometry};
 
 /// xorshift64: a fixed, portable sequence of cases.
 pub struct Rng(pub u64);
@@ -24,14 +24,24 @@ impl Rng {
         let (u1, u2, u3) = (self.next(), self.next(), self.next());
         let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
         let t = std::f64::consts::TAU;
-        Rotation::from_xyzw(a * (t * u2).sin(), a * (t * u2).cos(), b * (t * u3).sin(), b * (t * u3).cos()).normalize()
+        Rotation::from_xyzw(
+            a * (t * u2).sin(),
+            a * (t * u2).cos(),
+            b * (t * u3).sin(),
+            b * (t * u3).cos(),
+        )
+        .normalize()
     }
 
     /// A box (even `k`) with half extents 0.2–0.5, or the hull of twelve points 0.25–0.5 from
     /// its centre in random directions; and its volume.
     fn body(&mut self, k: usize) -> (ConvexShape, f64) {
         if k % 2 == 0 {
-            let h = Vector::new(0.2 + 0.3 * self.next(), 0.2 + 0.3 * self.next(), 0.2 + 0.3 * self.next());
+            let h = Vector::new(
+                0.2 + 0.3 * self.next(),
+                0.2 + 0.3 * self.next(),
+                0.2 + 0.3 * self.next(),
+            );
             (ConvexShape::cuboid(h).unwrap(), 8.0 * h.element_product())
         } else {
             let points: Vec<Vector> = (0..12)
@@ -59,14 +69,19 @@ pub struct Case {
 
 /// Case `k` of the sequence: boxes for even `k`, hulls for odd.
 pub fn case(rng: &mut Rng, k: usize) -> Case {
-    let exact_settings = OverlapSettings::new(8, IntegrationMode::Subcell).unwrap().with_exact_polyhedra(true);
+    let exact_settings =
+        OverlapSettings::new(8, IntegrationMode::Subcell).unwrap().with_exact_polyhedra(true);
     let ((a, va), (b, vb)) = (rng.body(k), rng.body(k));
     let pose_a = Pose::from_parts(Vector::ZERO, rng.rotation());
     let rb = rng.rotation();
     let dir = Vector::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).normalize();
     let target = (0.01 + 0.09 * rng.next()).powi(3) * va.min(vb);
     let at = |s: f64| Pose::from_parts(dir * s, rb);
-    let volume = |s: f64| compute_overlap(&a, &pose_a, &b, &at(s), &exact_settings, None).unwrap().map_or(0.0, |g| g.volume);
+    let volume = |s: f64| {
+        compute_overlap(&a, &pose_a, &b, &at(s), &exact_settings, None)
+            .unwrap()
+            .map_or(0.0, |g| g.volume)
+    };
     // Bisection on the centre distance for the target volume.
     let (mut lo, mut hi) = (0.0, 2.0);
     for _ in 0..50 {
@@ -78,7 +93,9 @@ pub fn case(rng: &mut Rng, k: usize) -> Case {
         }
     }
     let pose_b = at(lo);
-    let exact = compute_overlap(&a, &pose_a, &b, &pose_b, &exact_settings, None).unwrap().expect("overlaps at the bisected depth");
+    let exact = compute_overlap(&a, &pose_a, &b, &pose_b, &exact_settings, None)
+        .unwrap()
+        .expect("overlaps at the bisected depth");
     Case { a, pose_a, b, pose_b, exact }
 }
 
