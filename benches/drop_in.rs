@@ -4,7 +4,7 @@
 //! scale, with rapier's own contacts. Iterations advance the scene.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use discrete_contact::validation::drop_in::{self, bin_scene};
+use discrete_contact_validation::drop_in::{self, bin_scene};
 
 const BODIES: usize = 108;
 const WARM_STEPS: usize = 48;

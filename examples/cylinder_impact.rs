@@ -10,8 +10,8 @@
 #[path = "common/mod.rs"]
 mod common;
 
-use discrete_contact::validation::cylinder_impact::{park, simulate_with_reuse};
 use discrete_contact::{IntegrationMode, OverlapSettings};
+use discrete_contact_validation::cylinder_impact::{park, simulate_with_reuse};
 use plotters::prelude::*;
 use rayon::prelude::*;
 

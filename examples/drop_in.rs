@@ -16,7 +16,7 @@ mod common;
 
 use std::time::Instant;
 
-use discrete_contact::validation::drop_in::{
+use discrete_contact_validation::drop_in::{
     self, bin_scene, kinetic_energy, BinScene, BODY_RADIUS,
 };
 
@@ -76,7 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rapier_ke = kinetic_energy(&world);
 
     // 2. The same scene with the discrete contact: these lines are the drop-in (the settings,
-    //    rubber E = 5 MPa, e = 0.5, friction 0.5/0.4, are in `validation::drop_in`).
+    //    rubber E = 5 MPa, e = 0.5, friction 0.5/0.4, are in the validation crate's `drop_in`).
     let BinScene { mut world, .. } = bin_scene(n);
     let overlap =
         discrete_contact::OverlapSettings::new(n_c, discrete_contact::IntegrationMode::Subcell)?;

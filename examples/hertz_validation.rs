@@ -6,8 +6,8 @@
 #[path = "common/mod.rs"]
 mod common;
 
-use discrete_contact::validation::hertz::HertzCase;
 use discrete_contact::{IntegrationMode, OverlapSettings};
+use discrete_contact_validation::hertz::HertzCase;
 use plotters::prelude::*;
 
 const RESOLUTIONS: [usize; 5] = [2, 4, 8, 16, 32];

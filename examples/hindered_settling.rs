@@ -40,7 +40,7 @@ use std::time::Instant;
 use std::path::PathBuf;
 
 use discrete_contact::coupling::ForceMethod;
-use discrete_contact::validation::hindered_settling::{
+use discrete_contact_validation::hindered_settling::{
     HinderedSettling, ParticleShape, SettlingResult, SettlingRun,
 };
 use plotters::prelude::*;

@@ -9,8 +9,8 @@
 //! `cargo run --release --example stability_report -- resting` runs only the matrix cases whose
 //! description contains the given text (`-- precision`: only the precision table).
 
-use discrete_contact::validation::precision::{Ending, Impact};
-use discrete_contact::validation::stability::Case;
+use discrete_contact_validation::precision::{Ending, Impact};
+use discrete_contact_validation::stability::Case;
 use rayon::prelude::*;
 
 fn main() {

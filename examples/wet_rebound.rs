@@ -28,7 +28,7 @@ use std::time::Instant;
 
 use discrete_contact::coupling::ForceMethod;
 use discrete_contact::math::Vector;
-use discrete_contact::validation::wet_rebound::{ReboundRun, Trajectory, WetRebound};
+use discrete_contact_validation::wet_rebound::{ReboundRun, Trajectory, WetRebound};
 use plotters::prelude::*;
 
 /// One finished run.

@@ -489,8 +489,8 @@ impl Fluid {
     /// (tested: a sphere in a periodic box settles at a constant speed, as the Stokes cubic
     /// array). With the momentum exchange, fast bodies still leak a little: the nodes a moving
     /// body newly covers are turned to its velocity without the body paying for it (−1.4 % of
-    /// the net weight at Re ≈ 24, lattice speed 0.07; see
-    /// [`SettlingResult::momentum_imbalance`](crate::validation::hindered_settling::SettlingResult::momentum_imbalance)).
+    /// the net weight at Re ≈ 24, lattice speed 0.07, as the `hindered_settling` example's
+    /// momentum imbalance reports).
     /// Call it after coupling the bodies; returns `a` (m/s²).
     pub fn balance_weight(&mut self, world: &PhysicsWorld) -> Result<Vector> {
         let rho = self.units.density();

@@ -43,7 +43,7 @@
 //! which for stiff slow impacts is nanometres — below f32's spacing of coordinates a metre from
 //! the origin (1.2e-7 m). With the body's state rounded to f32 each sub-step, a 200 GPa sphere
 //! at 1 cm/s never reaches the wall 1 m from the origin, and restitution errors at 1 m/s grow
-//! from 0.6 % to 1.8–2.6 % ([`validation::precision`], table in `stability_report`); in f64
+//! from 0.6 % to 1.8–2.6 % (the `stability_report` example's precision table); in f64
 //! the same impacts agree to 1e-3 wherever the scene is.
 //!
 //! ## Errors
@@ -155,7 +155,6 @@ pub mod periodic;
 pub mod rapier;
 pub mod shape;
 pub mod tangential;
-pub mod validation;
 
 /// The README's example, compiled and run as a doc test.
 #[doc = include_str!("../README.md")]

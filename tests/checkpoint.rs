@@ -14,12 +14,12 @@ use discrete_contact::math::Vector;
 use discrete_contact::parry3d_f64::bounding_volume::Aabb;
 use discrete_contact::rapier::DiscreteContacts;
 use discrete_contact::rapier3d_f64::prelude::*;
-use discrete_contact::validation::drop_in::{bin_scene, discrete_contacts, rubber};
-use discrete_contact::validation::hindered_settling::{
+use discrete_contact::{ConvexShape, Error};
+use discrete_contact_validation::drop_in::{bin_scene, discrete_contacts, rubber};
+use discrete_contact_validation::hindered_settling::{
     HinderedSettling, ParticleShape, SettlingRun,
 };
-use discrete_contact::validation::wet_rebound::{ReboundRun, WetRebound};
-use discrete_contact::{ConvexShape, Error};
+use discrete_contact_validation::wet_rebound::{ReboundRun, WetRebound};
 
 /// A fresh folder for one test's files.
 fn scratch(test: &str) -> PathBuf {
@@ -171,7 +171,7 @@ fn a_wet_run_in_a_closed_box_resumed_during_its_impact_is_bit_identical() {
         resumed.step().unwrap();
     }
     let resumed = resumed.finish();
-    let bits = |t: &discrete_contact::validation::wet_rebound::Trajectory| -> Vec<u64> {
+    let bits = |t: &discrete_contact_validation::wet_rebound::Trajectory| -> Vec<u64> {
         t.samples.iter().flat_map(|s| [s.0, s.1, s.2]).map(f64::to_bits).collect()
     };
     assert!(bits(&resumed) == bits(&whole), "gap and velocity series differ after resuming");

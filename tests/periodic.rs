@@ -7,7 +7,7 @@ use discrete_contact::periodic::PeriodicBox;
 use discrete_contact::prelude::*;
 use discrete_contact::rapier::DiscreteContacts;
 use discrete_contact::rapier3d_f64::prelude::*;
-use discrete_contact::validation::hindered_settling::{
+use discrete_contact_validation::hindered_settling::{
     run, HinderedSettling, ParticleShape, SettlingRun,
 };
 
@@ -291,7 +291,7 @@ fn contacts_limit(f: Real) -> discrete_contact::Result<DiscreteContacts> {
 /// the quarter-Δx gap (nearest periodic image, parry's distance), inside the box.
 #[test]
 fn cubes_at_thirty_percent_are_placed_without_overlap() {
-    use discrete_contact::validation::hindered_settling::place_particles;
+    use discrete_contact_validation::hindered_settling::place_particles;
     let mut case = HinderedSettling::seed_002(ParticleShape::Cube, 0.3, 1000.0).unwrap();
     case.nodes_per_diameter = 6.0;
     case.box_nodes = 30;

@@ -3,8 +3,8 @@
 
 use approx::assert_relative_eq;
 use discrete_contact::prelude::*;
-use discrete_contact::validation::hertz::HertzCase;
 use discrete_contact::{damping_from_restitution, ContactState};
+use discrete_contact_validation::hertz::HertzCase;
 
 fn settings(n: usize, mode: IntegrationMode) -> OverlapSettings {
     OverlapSettings::new(n, mode).unwrap()

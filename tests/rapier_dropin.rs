@@ -4,8 +4,8 @@
 
 use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
 use discrete_contact::rapier3d_f64::prelude::*;
-use discrete_contact::validation::cylinder_impact::{park, simulate};
 use discrete_contact::{Error, IntegrationMode, Material, OverlapSettings};
+use discrete_contact_validation::cylinder_impact::{park, simulate};
 
 /// Measured: at most 0.013 off Park for v+/v and R ω+/v over 10°…80° (sub-cell, N_c = 8).
 #[test]
@@ -87,7 +87,7 @@ fn automatic_substeps_resolve_a_stiff_impact_and_keep_user_forces() {
 /// stability_report`).
 #[test]
 fn stability_cases_end_right_or_are_refused() {
-    use discrete_contact::validation::stability::Case;
+    use discrete_contact_validation::stability::Case;
     let expect = [
         (Case::NormalImpact { youngs: 2e11, speed: 30.0, restitution: 0.85 }, "ok"),
         (Case::NormalImpact { youngs: 5e8, speed: 0.01, restitution: 0.1 }, "ok"),
@@ -113,7 +113,7 @@ fn stability_cases_end_right_or_are_refused() {
 /// on one thread and on two.
 #[test]
 fn contact_forces_do_not_depend_on_the_thread_count() {
-    use discrete_contact::validation::drop_in::bin_scene;
+    use discrete_contact_validation::drop_in::bin_scene;
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
@@ -148,7 +148,7 @@ fn contact_forces_do_not_depend_on_the_thread_count() {
 /// of coordinates near 10 m, 1e-6 m).
 #[test]
 fn a_stiff_impact_does_not_depend_on_where_the_scene_is_in_f64_and_stalls_in_f32() {
-    use discrete_contact::validation::precision::{Ending, Impact};
+    use discrete_contact_validation::precision::{Ending, Impact};
     let at = |offset: f64, f32_state: bool| {
         Impact { youngs: 2e11, speed: 0.01, offset }.run(f32_state).unwrap()
     };

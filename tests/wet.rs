@@ -10,7 +10,7 @@ use discrete_contact::hlbm::correlations::{
 };
 use discrete_contact::math::{Real, Rotation, Vector};
 use discrete_contact::rapier3d_f64::prelude::*;
-use discrete_contact::validation::wet_rebound::{run, Trajectory, WetRebound};
+use discrete_contact_validation::wet_rebound::{run, Trajectory, WetRebound};
 
 #[test]
 fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {

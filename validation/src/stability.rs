@@ -5,15 +5,15 @@
 
 use std::time::Instant;
 
-use rapier3d_f64::prelude::{
+use discrete_contact::rapier3d_f64::prelude::{
     ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
 };
 
-use crate::error::{Error, Result};
-use crate::material::{effective_modulus, Material};
-use crate::math::{Pose, Real, Rotation, Vector};
-use crate::overlap::{IntegrationMode, OverlapSettings};
-use crate::rapier::{DiscreteContacts, StepPolicy};
+use discrete_contact::error::{Error, Result};
+use discrete_contact::material::{effective_modulus, Material};
+use discrete_contact::math::{Pose, Real, Rotation, Vector};
+use discrete_contact::overlap::{IntegrationMode, OverlapSettings};
+use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
 
 /// Radius of every sphere of the matrix (m).
 pub(crate) const RADIUS: Real = 0.005;
@@ -382,7 +382,7 @@ impl Case {
         };
         let mut contacts =
             DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell)?, 0.5)?
-                .with_friction(crate::material::Friction::new(0.5, 0.4, 0.01)?)
+                .with_friction(discrete_contact::material::Friction::new(0.5, 0.4, 0.01)?)
                 .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
         contacts.handle_all(&mut world, Material::new(1e7, 0.45)?)?;
         let steps = (seconds * 240.0).round() as usize;

@@ -4,13 +4,13 @@
 //! of the floor. Nothing in it knows about the discrete contact: the same world runs with
 //! rapier's own contacts or with [`DiscreteContacts`].
 
-use rapier3d_f64::prelude::*;
+use discrete_contact::rapier3d_f64::prelude::*;
 
-use crate::error::Result;
-use crate::material::{Friction, Material};
-use crate::math::{Real, Vector};
-use crate::overlap::{IntegrationMode, OverlapSettings};
-use crate::rapier::{DiscreteContacts, StepPolicy};
+use discrete_contact::error::Result;
+use discrete_contact::material::{Friction, Material};
+use discrete_contact::math::{Real, Vector};
+use discrete_contact::overlap::{IntegrationMode, OverlapSettings};
+use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
 
 /// Size of the bodies (m): spheres of this radius; the other shapes have similar volume.
 pub const BODY_RADIUS: Real = 0.01;

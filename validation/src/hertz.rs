@@ -7,12 +7,12 @@
 
 use std::f64::consts::FRAC_PI_2;
 
-use crate::error::Result;
-use crate::force::normal_force;
-use crate::material::{effective_modulus, Material, PairParameters, StiffnessFactor};
-use crate::math::{Pose, Real, Rotation, Vector};
-use crate::overlap::{compute_overlap, OverlapGeometry, OverlapSettings};
-use crate::shape::ConvexShape;
+use discrete_contact::error::Result;
+use discrete_contact::force::normal_force;
+use discrete_contact::material::{effective_modulus, Material, PairParameters, StiffnessFactor};
+use discrete_contact::math::{Pose, Real, Rotation, Vector};
+use discrete_contact::overlap::{compute_overlap, OverlapGeometry, OverlapSettings};
+use discrete_contact::shape::ConvexShape;
 
 /// Largest indentation of the sweep (m).
 pub const MAX_INDENTATION: Real = 0.05;

@@ -7,15 +7,15 @@
 
 use std::time::Instant;
 
-use rapier3d_f64::prelude::{
+use discrete_contact::rapier3d_f64::prelude::{
     ColliderBuilder, MassProperties, PhysicsWorld, RigidBodyBuilder, SharedShape,
 };
 
-use crate::error::Result;
-use crate::material::Material;
-use crate::math::{Pose, Real, Rotation, Vector};
-use crate::overlap::OverlapSettings;
-use crate::rapier::{DiscreteContacts, StepPolicy};
+use discrete_contact::error::Result;
+use discrete_contact::material::Material;
+use discrete_contact::math::{Pose, Real, Rotation, Vector};
+use discrete_contact::overlap::OverlapSettings;
+use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
 
 /// Cylinder height (m).
 pub const HEIGHT: Real = 5.3e-3;
@@ -59,9 +59,9 @@ pub struct Rebound {
 }
 
 /// Runs the impact at `theta_deg` and returns the state when the first contact ends, with the
-/// drop-in's default geometry reuse ([`GEOMETRY_REUSE`](crate::contact::GEOMETRY_REUSE)).
+/// drop-in's default geometry reuse ([`GEOMETRY_REUSE`](discrete_contact::contact::GEOMETRY_REUSE)).
 pub fn simulate(theta_deg: Real, settings: OverlapSettings) -> Result<Rebound> {
-    simulate_with_reuse(theta_deg, settings, crate::contact::GEOMETRY_REUSE)
+    simulate_with_reuse(theta_deg, settings, discrete_contact::contact::GEOMETRY_REUSE)
 }
 
 /// [`simulate`] with geometry reuse at `reuse` (0: every sub-step evaluates the contact in

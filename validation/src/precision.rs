@@ -7,16 +7,16 @@
 //! a sub-step moves a body by `v Δt_sub`, and once that is below the f32 spacing of its
 //! coordinates (1.2e-7 m at 1 m) the body's position stops changing.
 
-use rapier3d_f64::prelude::{
+use discrete_contact::rapier3d_f64::prelude::{
     ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
 };
 
-use crate::error::Result;
-use crate::material::{effective_modulus, hertz_contact_time, Material};
-use crate::math::{Pose, Real, Rotation, Vector};
-use crate::overlap::{IntegrationMode, OverlapSettings};
-use crate::rapier::{DiscreteContacts, StepPolicy};
-use crate::validation::stability::RADIUS;
+use crate::stability::RADIUS;
+use discrete_contact::error::Result;
+use discrete_contact::material::{effective_modulus, hertz_contact_time, Material};
+use discrete_contact::math::{Pose, Real, Rotation, Vector};
+use discrete_contact::overlap::{IntegrationMode, OverlapSettings};
+use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
 
 /// One impact: a 1 cm steel sphere (7800 kg/m³, ν = 0.3, e = 0.85) hitting a half-space head-on.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -15,32 +15,31 @@
 
 use std::time::Instant;
 
-use parry3d_f64::query;
-use rand::rngs::Xoshiro256PlusPlus;
-use rand::{RngExt, SeedableRng};
-use rapier3d_f64::prelude::{
+use discrete_contact::parry3d_f64::query;
+use discrete_contact::rapier3d_f64::prelude::{
     ColliderBuilder, ColliderHandle, InteractionGroups, PhysicsWorld, RigidBodyBuilder,
     RigidBodyHandle, SharedShape,
 };
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
 
-use crate::coupling::{Fluid, FluidSettings, FluidStepReport, ForceMethod};
-use crate::error::{Error, Result};
-use crate::material::{Friction, Material};
-use crate::math::{Pose, Real, Rotation, Vector};
-use crate::overlap::{IntegrationMode, OverlapSettings};
-use crate::periodic::PeriodicBox;
-use crate::rapier::{DiscreteContacts, StepPolicy};
-use crate::tangential::TangentialLaw;
-use hlbm::correlations::{
+use discrete_contact::coupling::{Fluid, FluidSettings, FluidStepReport, ForceMethod};
+use discrete_contact::error::{Error, Result};
+use discrete_contact::hlbm::correlations::{
     garside_al_dibouni_exponent, richardson_zaki_exponent, schiller_naumann_terminal_velocity,
 };
+use discrete_contact::material::{Friction, Material};
+use discrete_contact::math::{Pose, Real, Rotation, Vector};
+use discrete_contact::overlap::{IntegrationMode, OverlapSettings};
+use discrete_contact::periodic::PeriodicBox;
+use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
+use discrete_contact::tangential::TangentialLaw;
 
 /// Standard gravity (m/s²).
 const G: Real = 9.81;
 
 /// The particles' shape; a cube has the volume of the sphere of diameter `D`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ParticleShape {
     /// Spheres of diameter `D`.
     Sphere,
@@ -59,8 +58,7 @@ impl ParticleShape {
 }
 
 /// One hindered-settling run (SI units).
-#[derive(Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HinderedSettling {
     /// Particle shape.
     pub shape: ParticleShape,
@@ -249,8 +247,7 @@ impl HinderedSettling {
 }
 
 /// What a run measured.
-#[derive(Clone, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SettlingResult {
     /// Particles placed.
     pub particles: usize,
@@ -268,7 +265,7 @@ pub struct SettlingResult {
     /// Wall-clock time of the set-up: placement, bodies, lattice (s).
     pub setup_time: Real,
     /// Wall-clock seconds in mapping, lattice and bodies (rapier + contacts), summed.
-    pub seconds: crate::coupling::StepSeconds,
+    pub seconds: discrete_contact::coupling::StepSeconds,
     /// Most contacts alive at once.
     pub max_contacts: usize,
     /// Total momentum along `z` (up; gravity is −z) at every sample — bodies plus the fluid
@@ -441,13 +438,12 @@ pub struct Progress<'a> {
 }
 
 /// The label of a settling run's checkpoints.
-#[cfg(feature = "checkpoint")]
 pub const CHECKPOINT_KIND: &str = "discrete-contact/hindered_settling";
 
 /// A hindered-settling run in progress: the rapier world, the fluid, the contacts and what has
 /// been measured so far. It can be saved at any step and resumed with bit-identical results
 /// ([`save`](Self::save), [`load`](Self::load); feature `checkpoint`).
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct SettlingRun {
     case: HinderedSettling,
     world: PhysicsWorld,
@@ -635,16 +631,14 @@ impl SettlingRun {
         self.result
     }
 
-    /// Saves the run to `path` (atomically; see [`crate::checkpoint`]).
-    #[cfg(feature = "checkpoint")]
+    /// Saves the run to `path` (atomically; see [`discrete_contact::checkpoint`]).
     pub fn save(&self, path: &std::path::Path) -> Result<()> {
-        crate::checkpoint::save(path, CHECKPOINT_KIND, self)
+        discrete_contact::checkpoint::save(path, CHECKPOINT_KIND, self)
     }
 
     /// Resumes a run saved with [`save`](Self::save); it goes on exactly as the saved run
     /// would have. Refused with [`Error::Checkpoint`] when the file is not such a run (or is
     /// damaged), and with [`Error::InvalidParameter`] naming `case` when it holds another case.
-    #[cfg(feature = "checkpoint")]
     pub fn load(path: &std::path::Path, case: &HinderedSettling) -> Result<Self> {
         super::resume(
             path,

@@ -7,20 +7,19 @@
 
 use std::time::Instant;
 
-use rapier3d_f64::prelude::{
+use discrete_contact::rapier3d_f64::prelude::{
     ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, SharedShape,
 };
 
-use crate::coupling::{Fluid, FluidSettings, ForceMethod};
-use crate::error::Result;
-use crate::material::Material;
-use crate::math::{Real, Vector};
-use crate::overlap::{IntegrationMode, OverlapSettings};
-use crate::rapier::{DiscreteContacts, StepPolicy};
+use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod};
+use discrete_contact::error::Result;
+use discrete_contact::material::Material;
+use discrete_contact::math::{Real, Vector};
+use discrete_contact::overlap::{IntegrationMode, OverlapSettings};
+use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
 
 /// One immersed sphere–wall collision experiment (SI units).
-#[derive(Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WetRebound {
     /// Sphere radius (m).
     pub radius: Real,
@@ -108,8 +107,7 @@ impl WetRebound {
 }
 
 /// What a run recorded.
-#[derive(Clone, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Trajectory {
     /// (time (s), gap between the sphere's surface and the floor (m), vertical velocity (m/s))
     /// after every step.
@@ -161,13 +159,12 @@ impl Trajectory {
 }
 
 /// The label of a rebound run's checkpoints.
-#[cfg(feature = "checkpoint")]
 pub const CHECKPOINT_KIND: &str = "discrete-contact/wet_rebound";
 
 /// A rebound run in progress: world, fluid, contacts and the trajectory so far. It can be
 /// saved at any step and resumed with bit-identical results ([`save`](Self::save),
 /// [`load`](Self::load); feature `checkpoint`).
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct ReboundRun {
     case: WetRebound,
     world: PhysicsWorld,
@@ -322,16 +319,14 @@ impl ReboundRun {
         self.out
     }
 
-    /// Saves the run to `path` (atomically; see [`crate::checkpoint`]).
-    #[cfg(feature = "checkpoint")]
+    /// Saves the run to `path` (atomically; see [`discrete_contact::checkpoint`]).
     pub fn save(&self, path: &std::path::Path) -> Result<()> {
-        crate::checkpoint::save(path, CHECKPOINT_KIND, self)
+        discrete_contact::checkpoint::save(path, CHECKPOINT_KIND, self)
     }
 
-    /// Resumes a run saved with [`save`](Self::save); refused with [`Error::Checkpoint`](crate::Error::Checkpoint) when
-    /// the file is not such a run (or is damaged), and with [`Error::InvalidParameter`](crate::Error::InvalidParameter) naming
+    /// Resumes a run saved with [`save`](Self::save); refused with [`Error::Checkpoint`](discrete_contact::Error::Checkpoint) when
+    /// the file is not such a run (or is damaged), and with [`Error::InvalidParameter`](discrete_contact::Error::InvalidParameter) naming
     /// `case` when it holds another case.
-    #[cfg(feature = "checkpoint")]
     pub fn load(path: &std::path::Path, case: &WetRebound) -> Result<Self> {
         super::resume(
             path,
