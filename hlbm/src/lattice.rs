@@ -1471,7 +1471,7 @@ fn exchange_half<const INCOMING: bool>(
 }
 
 /// How many blocks ahead the sweep prefetches its 19 read (and, in odd steps, 19 write)
-/// streams. Measured on 128³, 2 threads (one session): none ~105 MLUPs, 1 block ~122, 2 blocks
+/// streams. Measured on 128³, 2 threads (one run): none ~105 MLUPs, 1 block ~122, 2 blocks
 /// ~127, 3 ~126, 4 ~124, 8 ~100 — the hardware prefetchers do not follow 38 streams alone.
 const PREFETCH_BLOCKS: usize = 2;
 
