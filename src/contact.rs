@@ -275,15 +275,7 @@ fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry
 /// fraction itself, or [`Error::InvalidParameter`](crate::Error::InvalidParameter) naming
 /// `geometry_reuse` outside `0 <= fraction <= 100`.
 pub fn check_reuse(fraction: Real) -> Result<Real> {
-    crate::error::check_range(
-        "geometry_reuse",
-        fraction,
-        0.0,
-        true,
-        100.0,
-        true,
-        "0 <= fraction <= 100",
-    )
+    crate::error::check_range("geometry_reuse", fraction, 0.0..=100.0, "0 <= fraction <= 100")
 }
 
 /// A's body frame in B's body frame.

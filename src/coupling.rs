@@ -56,6 +56,7 @@
 pub use hlbm::ForceMethod;
 use hlbm::{solid_fraction, Lattice, ParticleBody, ParticleNode, UnitConverter};
 use rapier3d_f64::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
+use std::ops::Bound::{Excluded, Included};
 
 use crate::error::{check_positive, Error, Result};
 use crate::math::{Real, Vector};
@@ -96,10 +97,7 @@ impl FluidSettings {
         self.smoothing = crate::error::check_range(
             "smoothing",
             eps,
-            0.0,
-            false,
-            4.0 * self.units.dx(),
-            true,
+            (Excluded(0.0), Included(4.0 * self.units.dx())),
             "0 < eps <= 4 dx",
         )?;
         Ok(self)
@@ -238,7 +236,7 @@ impl Fluid {
 
     /// Couples the body of `collider` (a dynamic body with a bounded convex shape) to the fluid.
     pub fn couple(&mut self, world: &PhysicsWorld, collider: ColliderHandle) -> Result<()> {
-        let bad = |allowed| Error::InvalidParameter { name: "collider", value: Real::NAN, allowed };
+        let bad = |allowed| Error::InvalidArgument { name: "collider", allowed };
         let co =
             world.colliders.get(collider).ok_or(bad("a handle of a collider in this world"))?;
         let body = co.parent().filter(|&h| world.bodies.get(h).is_some_and(|rb| rb.is_dynamic()));
@@ -275,9 +273,8 @@ impl Fluid {
     ) -> Result<FluidStepReport> {
         if let Some(c) = &contacts {
             if c.periodic() != self.periodic_box().as_ref() {
-                return Err(Error::InvalidParameter {
+                return Err(Error::InvalidArgument {
                     name: "periodic box of the contacts",
-                    value: Real::NAN,
                     allowed: "the fluid's own: DiscreteContacts::with_periodic(fluid.periodic_box()) when the fluid is periodic, none when it is not",
                 });
             }

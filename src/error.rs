@@ -1,6 +1,8 @@
 //! Typed errors: every error names what was wrong and what would be right.
 
 use crate::math::Real;
+use std::ops::Bound::{Excluded, Unbounded};
+use std::ops::RangeBounds;
 
 /// Everything the library can refuse, with the reason.
 ///
@@ -15,6 +17,15 @@ pub enum Error {
         /// The value that was given.
         value: Real,
         /// The allowed range, in words.
+        allowed: &'static str,
+    },
+    /// An argument that is not a number and not what the call accepts: a handle of another
+    /// world, a collider not attached to a dynamic body, a periodic box that does not match.
+    #[error("invalid argument `{name}`: needs {allowed}")]
+    InvalidArgument {
+        /// The argument's name, as in the API.
+        name: &'static str,
+        /// What it must be, in words.
         allowed: &'static str,
     },
     /// A parry shape that has no convex signed distance function here.
@@ -154,19 +165,16 @@ pub enum CheckpointProblem {
 /// `Result` with this crate's [`Error`].
 pub type Result<T> = core::result::Result<T, Error>;
 
-/// Checks that `value` is finite and inside `[lo, hi]` (inclusive bounds where `*_incl`).
+/// Checks that `value` is finite and inside `range` (bounds inclusive or exclusive as the range
+/// says: `0.0..=0.5`, or `(Excluded(0.0), Included(1.0))`); else
+/// [`Error::InvalidParameter`] with `name` and `allowed`.
 pub(crate) fn check_range(
     name: &'static str,
     value: Real,
-    lo: Real,
-    lo_incl: bool,
-    hi: Real,
-    hi_incl: bool,
+    range: impl RangeBounds<Real>,
     allowed: &'static str,
 ) -> Result<Real> {
-    let lo_ok = if lo_incl { value >= lo } else { value > lo };
-    let hi_ok = if hi_incl { value <= hi } else { value < hi };
-    if value.is_finite() && lo_ok && hi_ok {
+    if value.is_finite() && range.contains(&value) {
         Ok(value)
     } else {
         Err(Error::InvalidParameter { name, value, allowed })
@@ -175,12 +183,12 @@ pub(crate) fn check_range(
 
 /// Checks that `value` is finite and strictly positive.
 pub(crate) fn check_positive(name: &'static str, value: Real) -> Result<Real> {
-    check_range(name, value, 0.0, false, Real::INFINITY, false, "finite and > 0")
+    check_range(name, value, (Excluded(0.0), Unbounded), "finite and > 0")
 }
 
 /// Checks that `value` is finite and not negative.
 pub(crate) fn check_non_negative(name: &'static str, value: Real) -> Result<Real> {
-    check_range(name, value, 0.0, true, Real::INFINITY, false, "finite and >= 0")
+    check_range(name, value, 0.0.., "finite and >= 0")
 }
 
 /// Checks that every component of a vector is finite.

@@ -51,6 +51,9 @@
 //! - [`Error::InvalidParameter`] — a scalar outside its range (`E > 0`, `0 <= ν <= 0.5`,
 //!   `0 < e <= 1`, `μ_s >= μ_k >= 0`, `v_s > 0`, `N_c >= 1`, positive finite sizes); the message
 //!   names the parameter and the range. Fix the input.
+//! - [`Error::InvalidArgument`] — an argument that is not a number and not what the call
+//!   accepts (a collider handle of another world, a collider without a dynamic body for the
+//!   fluid, contacts whose periodic box is not the fluid's, a saved run of another case).
 //! - [`Error::UnsupportedShape`] — a parry shape with no convex SDF (meshes, compounds,
 //!   height fields); decompose it into convex pieces or pass a custom SDF.
 //! - [`Error::NonFinite`] — a NaN/infinite pose, velocity or vertex; usually a blown-up

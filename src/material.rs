@@ -5,6 +5,7 @@
 use crate::error::{check_non_negative, check_positive, check_range, Error, Result};
 use crate::math::Real;
 use crate::tangential::TangentialLaw;
+use std::ops::Bound::{Excluded, Included};
 
 /// An isotropic elastic material.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,10 +24,7 @@ impl Material {
             poisson_ratio: check_range(
                 "poisson_ratio",
                 poisson_ratio,
-                0.0,
-                true,
-                0.5,
-                true,
+                0.0..=0.5,
                 "0 <= nu <= 0.5",
             )?,
         })
@@ -164,7 +162,7 @@ pub fn hertz_contact_time(m_star: Real, r_star: Real, e_star: Real, v0: Real) ->
 /// Solves `a - ln(1 + a) = -a e - ln(1 - a e)` for `0 < a < 1/e` and returns `c = a / v0`;
 /// `e = 1` gives `c = 0`.
 pub fn damping_from_restitution(restitution: Real, approach_speed: Real) -> Result<Real> {
-    let e = check_range("restitution", restitution, 0.0, false, 1.0, true, "0 < e <= 1")?;
+    let e = check_range("restitution", restitution, (Excluded(0.0), Included(1.0)), "0 < e <= 1")?;
     let v0 = check_positive("approach_speed", approach_speed)?;
     Ok(restitution_parameter(e) / v0)
 }
@@ -234,10 +232,7 @@ impl PairParameters {
             restitution: check_range(
                 "restitution",
                 restitution,
-                0.0,
-                false,
-                1.0,
-                true,
+                (Excluded(0.0), Included(1.0)),
                 "0 < e <= 1",
             )?,
             friction: Friction::NONE,

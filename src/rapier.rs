@@ -43,6 +43,7 @@ use rapier3d_f64::prelude::{
     ActiveHooks, Collider, ColliderHandle, ContactModificationContext, EventHandler,
     PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodyType, SolverFlags,
 };
+use std::ops::Bound::{Excluded, Included};
 
 use crate::contact::{BodyState, ContactModel, ContactState};
 use crate::error::{check_positive, Error, Result};
@@ -244,7 +245,12 @@ impl DiscreteContacts {
     /// stands — where Nassauer & Kuna's slip-speed law lets everything at rest creep;
     /// [`with_tangential_law`](Self::with_tangential_law) switches.
     pub fn new(settings: OverlapSettings, restitution: Real) -> Result<Self> {
-        crate::error::check_range("restitution", restitution, 0.0, false, 1.0, true, "0 < e <= 1")?;
+        crate::error::check_range(
+            "restitution",
+            restitution,
+            (Excluded(0.0), Included(1.0)),
+            "0 < e <= 1",
+        )?;
         Ok(Self {
             settings,
             restitution,
@@ -272,10 +278,7 @@ impl DiscreteContacts {
         self.indentation_limit = crate::error::check_range(
             "indentation_limit",
             fraction,
-            0.0,
-            false,
-            1.0,
-            true,
+            (Excluded(0.0), Included(1.0)),
             "0 < fraction <= 1",
         )?;
         Ok(self)
@@ -336,10 +339,7 @@ impl DiscreteContacts {
         self.substeps_per_contact = crate::error::check_range(
             "substeps_per_contact",
             n,
-            MIN_SUBSTEPS_PER_CONTACT,
-            true,
-            1e6,
-            true,
+            MIN_SUBSTEPS_PER_CONTACT..=1e6,
             "5 <= n <= 1e6",
         )?;
         Ok(self)
@@ -352,9 +352,8 @@ impl DiscreteContacts {
         collider: ColliderHandle,
         material: Material,
     ) -> Result<()> {
-        let co = world.colliders.get_mut(collider).ok_or(Error::InvalidParameter {
+        let co = world.colliders.get_mut(collider).ok_or(Error::InvalidArgument {
             name: "collider",
-            value: Real::NAN,
             allowed: "a handle of a collider in this world",
         })?;
         let shape = ConvexShape::from_parry(co.shape())?;

@@ -134,7 +134,7 @@ fn a_wet_periodic_run_resumed_from_a_checkpoint_is_bit_identical() {
     let mut other = case.clone();
     other.seed += 1;
     match SettlingRun::load(&path, &other) {
-        Err(Error::InvalidParameter { name: "case", .. }) => {}
+        Err(Error::InvalidArgument { name: "case", .. }) => {}
         other => panic!("resumed another case: {:?}", other.err()),
     }
 }

@@ -130,7 +130,9 @@ fn wet_rebound_creates_no_energy() {
 fn fluid_refuses_bad_input_by_name() {
     use discrete_contact::Error;
     let name = |e: Error| match e {
-        Error::InvalidParameter { name, .. } => name.to_string(),
+        Error::InvalidParameter { name, .. } | Error::InvalidArgument { name, .. } => {
+            name.to_string()
+        }
         Error::Fluid(discrete_contact::hlbm::Error::InvalidParameter { name, .. }) => {
             name.to_string()
         }

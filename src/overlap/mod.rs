@@ -82,7 +82,7 @@ pub struct OverlapSettings {
 impl OverlapSettings {
     /// `n_c >= 1` grid cells per direction on the overlap's box.
     pub fn new(n_c: usize, mode: IntegrationMode) -> Result<Self> {
-        check_range("n_c", n_c as Real, 1.0, true, 1024.0, true, "integer 1 <= N_c <= 1024")?;
+        check_range("n_c", n_c as Real, 1.0..=1024.0, "integer 1 <= N_c <= 1024")?;
         Ok(Self {
             n_c,
             mode,

@@ -23,11 +23,7 @@ pub(crate) fn resume<R: serde::de::DeserializeOwned, C: PartialEq>(
 ) -> discrete_contact::Result<R> {
     let run: R = discrete_contact::checkpoint::load(path, kind)?;
     if case_of(&run) != case {
-        return Err(discrete_contact::Error::InvalidParameter {
-            name: "case",
-            value: discrete_contact::math::Real::NAN,
-            allowed,
-        });
+        return Err(discrete_contact::Error::InvalidArgument { name: "case", allowed });
     }
     Ok(run)
 }
