@@ -10,7 +10,7 @@
 //! description contains the given text (`-- precision`: only the precision table).
 
 use discrete_contact_validation::precision::{Ending, Impact};
-use discrete_contact_validation::stability::Case;
+use discrete_contact_validation::stability::{Case, Verdict};
 use rayon::prelude::*;
 
 fn main() {
@@ -34,12 +34,12 @@ fn main() {
             o
         })
         .collect();
-    let failed = outcomes.iter().filter(|o| o.verdict.starts_with("FAILED")).count();
+    let failed = outcomes.iter().filter(|o| matches!(o.verdict, Verdict::Failed(_))).count();
     println!(
         "\n{} cases, {} ok, {} refused with advice, {failed} failed",
         cases.len(),
-        outcomes.iter().filter(|o| o.verdict == "ok").count(),
-        outcomes.iter().filter(|o| o.verdict == "refused").count()
+        outcomes.iter().filter(|o| o.verdict == Verdict::Ok).count(),
+        outcomes.iter().filter(|o| o.verdict == Verdict::Refused).count()
     );
     if filter.is_empty() || filter == "precision" {
         precision_table();

@@ -87,22 +87,22 @@ fn automatic_substeps_resolve_a_stiff_impact_and_keep_user_forces() {
 /// stability_report`).
 #[test]
 fn stability_cases_end_right_or_are_refused() {
-    use discrete_contact_validation::stability::Case;
+    use discrete_contact_validation::stability::{Case, Verdict};
     let expect = [
-        (Case::NormalImpact { youngs: 2e11, speed: 30.0, restitution: 0.85 }, "ok"),
-        (Case::NormalImpact { youngs: 5e8, speed: 0.01, restitution: 0.1 }, "ok"),
-        (Case::NormalImpact { youngs: 5e8, speed: 1.0, restitution: 1.0 }, "ok"),
-        (Case::NormalImpact { youngs: 1e6, speed: 30.0, restitution: 0.85 }, "refused"),
-        (Case::MassRatio { ratio: 1000.0 }, "ok"),
-        (Case::Grazing, "ok"),
-        (Case::ThinPlate, "ok"),
-        (Case::RefusedStep, "refused"),
-        (Case::Resting { steps: 2000, dt: 1e-4 }, "ok"),
+        (Case::NormalImpact { youngs: 2e11, speed: 30.0, restitution: 0.85 }, Verdict::Ok),
+        (Case::NormalImpact { youngs: 5e8, speed: 0.01, restitution: 0.1 }, Verdict::Ok),
+        (Case::NormalImpact { youngs: 5e8, speed: 1.0, restitution: 1.0 }, Verdict::Ok),
+        (Case::NormalImpact { youngs: 1e6, speed: 30.0, restitution: 0.85 }, Verdict::Refused),
+        (Case::MassRatio { ratio: 1000.0 }, Verdict::Ok),
+        (Case::Grazing, Verdict::Ok),
+        (Case::ThinPlate, Verdict::Ok),
+        (Case::RefusedStep, Verdict::Refused),
+        (Case::Resting { steps: 2000, dt: 1e-4 }, Verdict::Ok),
     ];
     for (case, verdict) in expect {
         let o = case.run();
         assert_eq!(o.verdict, verdict, "{}: {o:?}", case.describe());
-        if verdict == "ok" {
+        if verdict == Verdict::Ok {
             assert!(o.error <= 0.05, "{}: error {}", case.describe(), o.error);
         }
     }

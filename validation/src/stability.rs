@@ -64,11 +64,32 @@ pub enum Case {
 /// Side of the ramp's and the pyramid's boxes (m).
 const BOX: Real = 0.1;
 
+/// What a case's run says of it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Verdict {
+    /// It ended right (within the case's tolerance).
+    Ok,
+    /// It was refused with advice (`TimeStepTooLarge`, `ContactTooSoft`), as it should be.
+    Refused,
+    /// It went wrong; why.
+    Failed(String),
+}
+
+impl core::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Verdict::Ok => f.pad("ok"),
+            Verdict::Refused => f.pad("refused"),
+            Verdict::Failed(why) => f.pad(&format!("FAILED: {why}")),
+        }
+    }
+}
+
 /// How a case ended.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outcome {
-    /// `"ok"`, `"refused"` or `"FAILED: …"`.
-    pub verdict: String,
+    /// Whether it ended right, was refused, or failed.
+    pub verdict: Verdict,
     /// The measured error (meaning per case, see [`Case::describe`]).
     pub error: Real,
     /// Largest number of sub-steps of any step.
@@ -129,13 +150,13 @@ impl Case {
         let wall_time_s = start.elapsed().as_secs_f64();
         match (self, result) {
             (Case::RefusedStep, Err(Error::TimeStepTooLarge { substeps_needed, .. })) => Outcome {
-                verdict: "refused".into(),
+                verdict: Verdict::Refused,
                 error: 0.0,
                 substeps: substeps_needed,
                 wall_time_s,
             },
             (Case::RefusedStep, other) => Outcome {
-                verdict: format!("FAILED: not refused ({other:?})"),
+                verdict: Verdict::Failed(format!("not refused ({other:?})")),
                 error: Real::NAN,
                 substeps: 0,
                 wall_time_s,
@@ -144,16 +165,16 @@ impl Case {
                 Outcome { verdict, error, substeps, wall_time_s }
             }
             (_, Err(Error::TimeStepTooLarge { substeps_needed, .. })) => Outcome {
-                verdict: "refused".into(),
+                verdict: Verdict::Refused,
                 error: 0.0,
                 substeps: substeps_needed,
                 wall_time_s,
             },
             (_, Err(Error::ContactTooSoft { indentation, .. })) => {
-                Outcome { verdict: "refused".into(), error: indentation, substeps: 0, wall_time_s }
+                Outcome { verdict: Verdict::Refused, error: indentation, substeps: 0, wall_time_s }
             }
             (_, Err(e)) => Outcome {
-                verdict: format!("FAILED: {e}"),
+                verdict: Verdict::Failed(e.to_string()),
                 error: Real::NAN,
                 substeps: 0,
                 wall_time_s,
@@ -161,7 +182,7 @@ impl Case {
         }
     }
 
-    fn run_inner(&self) -> Result<(String, Real, usize)> {
+    fn run_inner(&self) -> Result<(Verdict, Real, usize)> {
         let r = RADIUS;
         let settings = OverlapSettings::new(4, IntegrationMode::Subcell)?;
         let mut world = PhysicsWorld::new();
@@ -272,7 +293,7 @@ impl Case {
             let rb = &world.bodies[body];
             lowest = lowest.min(rb.translation().y);
             if !rb.translation().is_finite() {
-                return Ok(("FAILED: non-finite state".into(), Real::NAN, substeps));
+                return Ok((Verdict::Failed("non-finite state".into()), Real::NAN, substeps));
             }
             // A stiff contact can begin and end within one step: its depth tells it was there.
             touched |= s.max_indentation > 0.0 || s.contacts > 0;
@@ -285,11 +306,11 @@ impl Case {
             + 0.5 * rb.angvel().dot(rb.angvel()) * rb.mass() * r * r * 0.4;
         let e_meas = rb.linvel().dot(normal) / v_n;
         if !touched {
-            return Ok(("FAILED: no contact".into(), Real::NAN, substeps));
+            return Ok((Verdict::Failed("no contact".into()), Real::NAN, substeps));
         }
         if lowest < 0.0 {
             return Ok((
-                format!("FAILED: tunnelled (centre at {lowest:e} m)"),
+                Verdict::Failed(format!("tunnelled (centre at {lowest:e} m)")),
                 Real::NAN,
                 substeps,
             ));
@@ -298,14 +319,14 @@ impl Case {
         // an elastic rebound comes out up to ~0.6 % fast; more than 1 % is a failure.
         if ke1 > ke0 * (1.0 + 1e-2) {
             return Ok((
-                format!("FAILED: energy created ({:.3}×)", ke1 / ke0),
+                Verdict::Failed(format!("energy created ({:.3}×)", ke1 / ke0)),
                 Real::NAN,
                 substeps,
             ));
         }
         let err = (e_meas / e - 1.0).abs();
         let verdict =
-            if err <= 0.05 { "ok".to_string() } else { format!("FAILED: e = {e_meas:.4}") };
+            if err <= 0.05 { Verdict::Ok } else { Verdict::Failed(format!("e = {e_meas:.4}")) };
         Ok((verdict, err, substeps))
     }
 
@@ -315,7 +336,7 @@ impl Case {
         a: RigidBodyHandle,
         b: RigidBodyHandle,
         e: Real,
-    ) -> Result<(String, Real, usize)> {
+    ) -> Result<(Verdict, Real, usize)> {
         let p0 = world.bodies[a].mass() * world.bodies[a].linvel()
             + world.bodies[b].mass() * world.bodies[b].linvel();
         let mut touched = false;
@@ -332,11 +353,11 @@ impl Case {
         let p1 = ra.mass() * ra.linvel() + rb.mass() * rb.linvel();
         let e_meas = (rb.linvel().x - ra.linvel().x) / 1.0;
         if (p1 - p0).length() > 1e-9 * p0.length() {
-            return Ok((format!("FAILED: momentum {p0:?} → {p1:?}"), Real::NAN, substeps));
+            return Ok((Verdict::Failed(format!("momentum {p0:?} → {p1:?}")), Real::NAN, substeps));
         }
         let err = (-e_meas / e - 1.0).abs();
         Ok((
-            if err <= 0.05 { "ok".into() } else { format!("FAILED: e = {:.4}", -e_meas) },
+            if err <= 0.05 { Verdict::Ok } else { Verdict::Failed(format!("e = {:.4}", -e_meas)) },
             err,
             substeps,
         ))
@@ -345,7 +366,7 @@ impl Case {
     /// The ramp (`ramp`) or the pyramid, left standing for `seconds` at 240 steps per second
     /// under gravity; the error is the watched box's displacement from 0.5 s (once it has
     /// settled into its contacts) to the end.
-    fn boxes(seconds: Real, ramp: bool) -> Result<(String, Real, usize)> {
+    fn boxes(seconds: Real, ramp: bool) -> Result<(Verdict, Real, usize)> {
         let mut world = PhysicsWorld::new();
         world.integration_parameters.dt = 1.0 / 240.0;
         let h = 0.5 * BOX;
@@ -395,14 +416,17 @@ impl Case {
         }
         let at = world.bodies[watched].translation();
         if !at.is_finite() {
-            return Ok(("FAILED: non-finite state".into(), Real::NAN, substeps));
+            return Ok((Verdict::Failed("non-finite state".into()), Real::NAN, substeps));
         }
         let drift = (at - settled.unwrap_or(at)).length();
         // Held: creeping below 1 mm/s after settling. Nassauer & Kuna's slip-speed law fails it
         // on the ramp (about 7 mm/s); rapier's own contacts hold the ramp's box to 0.03 mm/s.
         let creep = drift / (seconds - 0.5);
-        let verdict =
-            if creep < 1e-3 { "ok".to_string() } else { format!("FAILED: creeps {creep:e} m/s") };
+        let verdict = if creep < 1e-3 {
+            Verdict::Ok
+        } else {
+            Verdict::Failed(format!("creeps {creep:e} m/s"))
+        };
         Ok((verdict, drift, substeps))
     }
 
@@ -413,7 +437,7 @@ impl Case {
         b: RigidBodyHandle,
         steps: usize,
         e_star: Real,
-    ) -> Result<(String, Real, usize)> {
+    ) -> Result<(Verdict, Real, usize)> {
         let mut substeps = 0;
         let mut y_half = 0.0;
         let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
@@ -443,12 +467,12 @@ impl Case {
             && (d / d_hertz - 1.0).abs() < 0.05
             && rb.linvel().length() < 1e-6;
         let verdict = if ok {
-            "ok".into()
+            Verdict::Ok
         } else {
-            format!(
-                "FAILED: drift {drift:e} m, indentation {d:e} m (Hertz {d_hertz:e}), |v| {:e}",
+            Verdict::Failed(format!(
+                "drift {drift:e} m, indentation {d:e} m (Hertz {d_hertz:e}), |v| {:e}",
                 rb.linvel().length()
-            )
+            ))
         };
         Ok((verdict, drift, substeps))
     }
