@@ -43,10 +43,8 @@ use serde::Serialize;
 use crate::error::{CheckpointProblem, Error, Result};
 use crate::io::{io_error, write_atomically};
 
-/// The checkpoint format this build writes and reads (2: `OverlapSettings` carries
-/// `exact_polyhedra`; 3: a settling run's result carries its momentum series; 4: the lattice's
-/// particle nodes name their body, whose motion is stored once; 5: a contact keeps its last full
-/// geometry and the drop-in its geometry reuse).
+/// The checkpoint format this build writes and reads; raised whenever a saved type changes
+/// (a file of another format is refused with `CheckpointProblem::FormatVersion`).
 pub const FORMAT_VERSION: u32 = 5;
 
 /// Signature at the start of every checkpoint (a non-text byte first, as PNG does, so a text

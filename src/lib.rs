@@ -81,42 +81,16 @@
 //!   run), `Length` / `Checksum` (truncated or altered: use an earlier checkpoint), `Decode`
 //!   (the payload is not the state asked for, or a parameter in it fails its constructor's
 //!   check — the message names it and its range), `Encode` (the state holds something that cannot
-//!   be saved: a `ConvexShape::Custom` closure). Validation runs also refuse a checkpoint of
-//!   another case with `InvalidParameter` named `case`.
+//!   be saved: a `ConvexShape::Custom` closure). The validation runs also refuse a checkpoint of
+//!   another case, with `InvalidArgument` named `case`.
 //! - `Error::Fluid` — (feature `fluid`) the lattice refused a parameter (e.g. `τ <= 1/2`: raise
 //!   `Δt` or `ν`, or lower `Δx`), blew up (the message names the step and the node: lower the
 //!   lattice velocity with a smaller `Δt`, or raise `τ`), or could not write a file.
-
 //!
 //! ## Periodic boxes
 //! [`periodic::PeriodicBox`] given to `DiscreteContacts::with_periodic` (from
 //! `Fluid::periodic_box` in a wet run) makes contacts act through periodic faces and moves
 //! bodies that leave the box back into it; a scene without it pays nothing for periodicity.
-//!
-//! ## Past one machine (design note, not yet code)
-//! Everything parallel here is already decomposed the way a distributed run needs it:
-//! - **Lattice**: the sweep runs per z-slab; with MPI each rank owns a block of slabs (or a 3-D
-//!   block for many ranks) plus one ghost layer per face. The A-A pattern streams in place, so
-//!   after each step a rank sends its neighbour only the populations that cross the shared face
-//!   (5 of the 19 per face node for D3Q19; edges for 3-D blocks) — one message per neighbour
-//!   and step, overlapped with the interior sweep.
-//! - **Particles**: each particle is owned by the rank whose block holds its centre of mass
-//!   (the rule that already decides where a body lives in a periodic box). Ranks that its
-//!   bounding box plus the smoothing band reaches get a ghost copy (pose, velocities) each step
-//!   and write its `d_B`; after the lattice step they send their partial force and moment —
-//!   moments are summed from per-node lever arms, so partial sums add up wherever they were
-//!   taken — to the owner, which adds them in rank order (results independent of the rank
-//!   count, as they are of the thread count now).
-//! - **Contacts**: a pair is evaluated once, by the owner of the particle that comes first
-//!   (as a contact through a periodic face is evaluated on the first body's side), against a
-//!   ghost of the other within reach (bounding radii + enlargement + distance travelled in a
-//!   step); the reaction goes back to the other's owner. A persistent contact's state (damping,
-//!   reference speed, box in a body frame) travels with it when its first particle changes
-//!   rank.
-//! - **Messages per step**: particle migration and ghosts, lattice halo, partial hydrodynamic
-//!   forces, contact reactions — all between neighbours; the only global operations are the
-//!   balance force's net weight (once) and diagnostics such as the mean settling velocity.
-//!   Each rank keeps its own rapier world of owned bodies plus kinematic ghosts.
 
 #![warn(missing_docs)]
 

@@ -80,12 +80,8 @@ pub struct ParticleForce {
 ///   above the forcing measure's (the momentum the moving nodes carry), see the settling tests.
 ///
 ///   Cost: finding the links takes a pass over the particle nodes of the rows that changed
-///   since the last step and their neighbours. With 18 % of a 128³ lattice covered by spheres
-///   of radius 4 (2 threads, `lbm_throughput`): plain fluid 147–161 MLUPs; forcing at
-///   0.81–0.85 of it, momentum exchange at 0.74–0.77 with the spheres at rest and 0.66–0.69
-///   with every row changing each step — a covered node costs 1.9–2.3×, 2.5–2.9× and 3.5–3.8×
-///   a fluid node. (Finding the links inside the sweep, block by block, measured slower: 33
-///   against 38 MLUPs on one thread.)
+///   since the last step and their neighbours; a covered node costs a few fluid nodes (the
+///   figures are in `hlbm/PERFORMANCE.md`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum ForceMethod {
@@ -774,10 +770,7 @@ impl Lattice {
     /// themselves) find their links again: per direction, one pass ([`row_links`]) compares
     /// the owners along the row's span of particle nodes with those of the neighbouring row it
     /// points into. A body moving a small fraction of a cell per step changes few of its rows
-    /// in a step. (Walking each row's nine neighbouring rows in the sparse field instead
-    /// measured ~2× slower; doing this block by block inside the sweep, slower too; runs of
-    /// one body's nodes per row, with the links found by interval arithmetic at their ends,
-    /// ~2.5× slower for bodies of a few cells, whose runs are short.)
+    /// in a step. (The alternatives measured slower are listed in `hlbm/PERFORMANCE.md`.)
     fn find_links(&mut self) {
         let (nx, ny, nz) = (self.nx, self.ny, self.nz);
         let kind = &self.kind;
@@ -1471,8 +1464,8 @@ fn exchange_half<const INCOMING: bool>(
 }
 
 /// How many blocks ahead the sweep prefetches its 19 read (and, in odd steps, 19 write)
-/// streams. Measured on 128³, 2 threads (one run): none ~105 MLUPs, 1 block ~122, 2 blocks
-/// ~127, 3 ~126, 4 ~124, 8 ~100 — the hardware prefetchers do not follow 38 streams alone.
+/// streams: the hardware prefetchers do not follow 38 streams alone. Two blocks measured best
+/// (`hlbm/PERFORMANCE.md`).
 const PREFETCH_BLOCKS: usize = 2;
 
 /// Instruction sets the sweep is compiled for, best first.

@@ -8,10 +8,9 @@ use crate::error::{Error, Result};
 /// the field's [`ParticleBody`] table; the node keeps which body it belongs to and on which
 /// periodic image of the lattice that body sees it (so a body straddling a periodic face gets
 /// the right lever arm on both sides).
-///
-/// (It held the node's velocity and lever arm itself, 64 bytes, until the mapping's writes and
-/// the sweep's and the links' reads of them were a quarter of a dense suspension's memory
-/// traffic.)
+/// Kept small (16 bytes) because the mapping writes and the sweep and the links read every
+/// node each step: per-node velocities and lever arms made that a quarter of a dense
+/// suspension's memory traffic.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ParticleNode {
