@@ -124,8 +124,6 @@ pub mod error;
 pub mod force;
 pub mod io;
 pub mod material;
-#[cfg(feature = "rapier")]
-mod neighbours;
 pub mod overlap;
 pub mod periodic;
 #[cfg(feature = "rapier")]

@@ -1,0 +1,210 @@
+//! Each sub-step's forces: the candidate pairs evaluated (in parallel), their forces and
+//! torques summed in the candidates' order and put on the bodies; periodic wrapping.
+
+use super::*;
+
+impl DiscreteContacts {
+    /// Moves every dynamic body of a handled bounded collider whose centre of mass left the
+    /// periodic box back by whole box lengths (its colliders with it; velocities untouched).
+    pub(super) fn wrap_bodies(&self, world: &mut PhysicsWorld) {
+        let Some(periodic) = self.periodic else { return };
+        let mut bodies: Vec<RigidBodyHandle> = self
+            .handled
+            .iter()
+            .filter(|(_, h)| h.radius.is_finite())
+            .filter_map(|(&c, _)| world.colliders.get(c).and_then(|co| co.parent()))
+            .collect();
+        bodies.sort_by_key(|h| h.into_raw_parts());
+        bodies.dedup();
+        for h in bodies {
+            let Some(rb) = world.bodies.get_mut(h) else { continue };
+            let shift = periodic.wrap_shift(rb.center_of_mass());
+            if !rb.is_dynamic() || shift == Vector::ZERO {
+                continue;
+            }
+            let pose = *rb.position();
+            rb.set_translation(pose.translation + shift, false);
+            // Rapier moves attached colliders at its next step; the fluid coupling reads them
+            // before that.
+            for &c in rb.colliders() {
+                if let Some(co) = world.colliders.get_mut(c) {
+                    let mut p = *co.position();
+                    p.translation += shift;
+                    co.set_position(p);
+                }
+            }
+        }
+    }
+
+    pub(super) fn kinematics(
+        world: &PhysicsWorld,
+        c: ColliderHandle,
+    ) -> (Pose, BodyKinematics, Option<RigidBodyHandle>, Real) {
+        let co = &world.colliders[c];
+        let pose = *co.position();
+        match co.parent().and_then(|h| world.bodies.get(h).map(|rb| (h, rb))) {
+            Some((h, rb)) => {
+                let k = BodyKinematics {
+                    center_of_mass: rb.center_of_mass(),
+                    linvel: rb.linvel(),
+                    angvel: rb.angvel(),
+                };
+                let mass = if rb.is_dynamic() { rb.mass() } else { Real::INFINITY };
+                (pose, k, Some(h), mass)
+            }
+            None => (pose, BodyKinematics::at_rest(pose.translation), None, Real::INFINITY),
+        }
+    }
+
+    /// `1/m + r²/I_min` (1/kg) of the body of collider `c`: how it yields to a tangential load
+    /// at distance `r` from its centre (r infinite: a half-space, not rotated by it); zero for a
+    /// body that does not move.
+    pub(super) fn tangential_compliance(world: &PhysicsWorld, c: ColliderHandle, r: Real) -> Real {
+        let Some(rb) = world.colliders[c].parent().and_then(|h| world.bodies.get(h)) else {
+            return 0.0;
+        };
+        if !rb.is_dynamic() {
+            return 0.0;
+        }
+        let props = &rb.mass_properties().local_mprops;
+        let i_min = props.principal_inertia().min_element();
+        let rotation = if r.is_finite() && i_min > 0.0 { r * r / i_min } else { 0.0 };
+        1.0 / rb.mass() + rotation
+    }
+
+    /// The pair's effective mass against a tangential load at the contact, `1/Σ(1/m + r²/I_min)`
+    /// (kg); infinite when neither body moves, zero while a mass is not yet computed.
+    pub(super) fn tangential_mass(
+        world: &PhysicsWorld,
+        (ca, ha): (ColliderHandle, &Handled),
+        (cb, hb): (ColliderHandle, &Handled),
+    ) -> Real {
+        1.0 / (Self::tangential_compliance(world, ca, ha.radius)
+            + Self::tangential_compliance(world, cb, hb.radius))
+    }
+
+    pub(super) fn params(&self, a: &Handled, b: &Handled) -> Result<PairParameters> {
+        PairParameters::new(&a.material, &b.material, self.restitution)?
+            .with_friction(self.friction)
+            .with_tangential_law(self.tangential)
+            .with_stiffness(self.stiffness)
+    }
+
+    /// Computes and adds the contact forces of all handled candidate pairs; returns each body's
+    /// force and torque as they were before (for [`take_back`]).
+    ///
+    /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
+    /// candidates' order afterwards, so the result does not depend on the thread count.
+    pub(super) fn apply_forces(
+        &mut self,
+        world: &mut PhysicsWorld,
+        stats: &mut StepStats,
+    ) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
+        let pairs = self.candidate_pairs(world)?;
+        let eps = self.settings.enlargement();
+        let this = &*self;
+        let w = &*world;
+        let evaluate = |&(ca, cb, shift): &Candidate| -> Result<Checked> {
+            let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
+            let (pa, ka, ba, _) = Self::kinematics(w, ca);
+            let (mut pb, mut kb, bb, _) = Self::kinematics(w, cb);
+            // B's nearest image (periodic boxes); a rigid shift changes no force or torque.
+            pb.translation += shift;
+            kb.center_of_mass += shift;
+            // A live contact is evaluated (it ends there when the bodies part). Other pairs:
+            // parry's exact distance (GJK) rules out those that do not touch for a fraction of
+            // an evaluation's cost, and a pair found apart stays apart without one while the
+            // bodies have moved less than its margin.
+            let mut state = this.states.get(&(ca, cb)).copied();
+            if state.is_none() {
+                if let Some(gap) = this.gaps.get(&(ca, cb)) {
+                    if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) < gap.margin {
+                        return Ok((None, Some(*gap)));
+                    }
+                }
+                let margin = parry3d_f64::query::distance(
+                    &pa,
+                    w.colliders[ca].shape(),
+                    &pb,
+                    w.colliders[cb].shape(),
+                )
+                .map_or(Real::NAN, |d| d.distance - (eps[0] + eps[1]));
+                if margin > 0.0 {
+                    return Ok((None, Some(Gap { margin, poses: (pa, pb) })));
+                }
+            }
+            // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
+            // not computed yet (zero before its first step) leaves it unknown.
+            let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
+            let params = if m_t > 0.0 {
+                this.params(ha, hb)?.with_tangential_mass(m_t)?
+            } else {
+                this.params(ha, hb)?
+            };
+            let model = ContactModel::new(params, this.settings)
+                .with_geometry_reuse(this.geometry_reuse)?;
+            let out = model.evaluate(
+                &BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
+                &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
+                &mut state,
+            )?;
+            Ok((
+                out.zip(state).map(|(out, state)| Evaluated {
+                    pair: (ca, cb),
+                    bodies: (ba, bb),
+                    out,
+                    state,
+                }),
+                None,
+            ))
+        };
+        #[cfg(feature = "parallel")]
+        let evaluated: Vec<Result<Checked>> = {
+            use rayon::prelude::*;
+            pairs.par_iter().map(evaluate).collect()
+        };
+        #[cfg(not(feature = "parallel"))]
+        let evaluated: Vec<Result<Checked>> = pairs.iter().map(evaluate).collect();
+
+        // Each body's sum runs in the candidates' order, whichever thread evaluated them.
+        let mut alive = HashMap::with_capacity_and_hasher(self.states.len(), Default::default());
+        let mut added: HashMap<RigidBodyHandle, (Vector, Vector)> = HashMap::default();
+        let mut add = |h: RigidBodyHandle, f: Vector, t: Vector| {
+            let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
+            e.0 += f;
+            e.1 += t;
+        };
+        let mut gaps = HashMap::with_capacity_and_hasher(self.gaps.len(), Default::default());
+        for (e, &(ca, cb, _)) in evaluated.into_iter().zip(&pairs) {
+            let (contact, gap) = e?;
+            if let Some(gap) = gap {
+                gaps.insert((ca, cb), gap);
+            }
+            let Some(Evaluated { pair, bodies, out, state }) = contact else { continue };
+            alive.insert(pair, state);
+            stats.evaluations += 1;
+            stats.full_evaluations += usize::from(out.full);
+            stats.max_indentation = stats.max_indentation.max(out.geometry.indentation);
+            let f = out.force;
+            if let Some(h) = bodies.0 {
+                add(h, f.force_on_a, f.torque_on_a);
+            }
+            if let Some(h) = bodies.1 {
+                add(h, -f.force_on_a, f.torque_on_b);
+            }
+        }
+        self.states = alive;
+        self.gaps = gaps;
+        let mut applied = Vec::with_capacity(added.len());
+        for (h, (f, t)) in added {
+            if let Some(rb) = world.bodies.get_mut(h) {
+                if rb.is_dynamic() {
+                    applied.push((h, rb.user_force(), rb.user_torque()));
+                    rb.add_force(f, true);
+                    rb.add_torque(t, true);
+                }
+            }
+        }
+        Ok(applied)
+    }
+}

@@ -1,0 +1,133 @@
+//! The sub-step advice: how many sub-steps a step needs so that every pair that may touch
+//! gets its contact resolved.
+
+use super::*;
+
+impl DiscreteContacts {
+    /// Sub-steps this step needs: the Hertz contact time
+    /// `t_H = 2.87 (m*² / (R* E*² v0))^(1/5)` of every handled candidate pair, at its current
+    /// approach speed, must span [`SUBSTEPS_PER_CONTACT`] sub-steps (or the number set with
+    /// [`with_substeps_per_contact`](Self::with_substeps_per_contact)). A pair whose Hertz
+    /// indentation `(15 m* v0² / (16 E* √R*))^(2/5)` exceeds a fraction (by default half, see
+    /// [`with_indentation_limit`](Self::with_indentation_limit)) of the smaller body's smallest
+    /// half-extent is refused
+    /// with [`Error::ContactTooSoft`].
+    ///
+    /// With friction through the tangential spring, its oscillation counts too: stiffness
+    /// `κ k_n` against the tangential effective mass `m_t` (`1/m_t = Σ 1/m + r²/I_min` over the
+    /// bodies, `r` the bounding radius; `2/7 m*` for two spheres), so its contact time is
+    /// `t_H √(m_t / (κ m*))`, about half of `t_H`. A live contact also counts with its own
+    /// stiffness `k_n = dF_n/dd` from its last evaluation (a face resting on a face is far
+    /// stiffer than the Hertz sphere of the bounding radii): half-periods `π √(m*/k_n)` and,
+    /// with the spring, `π √(m_t/(κ k_n))`. These need stability and a steady hold, not a
+    /// restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`] sub-steps at the default
+    /// [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps per contact are set,
+    /// never fewer than [`STABLE_SUBSTEPS_PER_HALF_PERIOD`].
+    pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
+        // (largest sub-step, the contact time that sets it, the pair)
+        let mut worst: Option<(Real, Real, String)> = None;
+        let spring = self.tangential == TangentialLaw::Spring && !self.friction.is_none();
+        let per_half_period = (MIN_SUBSTEPS_PER_CONTACT * self.substeps_per_contact
+            / SUBSTEPS_PER_CONTACT)
+            .max(STABLE_SUBSTEPS_PER_HALF_PERIOD);
+        for (ca, cb) in self.lookahead_pairs(world, dt)? {
+            let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
+            let (pa, ka, _, ma) = Self::kinematics(world, ca);
+            let (pb, kb, _, mb) = Self::kinematics(world, cb);
+            let m_star = 1.0 / (1.0 / ma + 1.0 / mb);
+            // Two immovable bodies, or a mass rapier has not computed yet (before its first step).
+            if !(m_star.is_finite() && m_star > 0.0) {
+                continue;
+            }
+            let r_star = 1.0 / (1.0 / ha.radius + 1.0 / hb.radius);
+            let e_star = effective_modulus(&ha.material, &hb.material);
+            // Relative speed bound: centre speeds plus rim speeds of the bounded bodies.
+            let rim = |k: &BodyKinematics, r: Real| {
+                if r.is_finite() {
+                    k.angvel.length() * r
+                } else {
+                    0.0
+                }
+            };
+            let rims = rim(&ka, ha.radius) + rim(&kb, hb.radius);
+            let v0 = ((ka.linvel - kb.linvel).length() + rims).max(1e-3);
+            let t_h = hertz_contact_time(m_star, r_star, e_star, v0);
+            // Hertz's deepest indentation, from the speed along the line from A to B (a body
+            // sliding past another does not indent it); beyond the limit the bodies pass through.
+            let towards_b = match (&ha.shape, &hb.shape) {
+                (ConvexShape::HalfSpace { normal }, _) => pa.rotation * *normal,
+                (_, ConvexShape::HalfSpace { normal }) => -(pb.rotation * *normal),
+                _ => {
+                    let (a, b) = (pa.transform_point(ha.centre), pb.transform_point(hb.centre));
+                    let image = self.periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a, b));
+                    (b + image - a).normalize_or_zero()
+                }
+            };
+            let v_normal = if towards_b == Vector::ZERO {
+                v0
+            } else {
+                ((ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rims).max(1e-3)
+            };
+            let depth =
+                (15.0 * m_star * v_normal * v_normal / (16.0 * e_star * r_star.sqrt())).powf(0.4);
+            let limit = self.indentation_limit * ha.half_size.min(hb.half_size);
+            if depth > limit {
+                return Err(Error::ContactTooSoft {
+                    pair: format!("colliders {ca:?} and {cb:?}"),
+                    speed: v_normal,
+                    indentation: depth,
+                    limit,
+                });
+            }
+            let mut limit = (t_h / self.substeps_per_contact, t_h);
+            let mut resolve = |t: Real| {
+                if t.is_finite() && t > 0.0 && t / per_half_period < limit.0 {
+                    limit = (t / per_half_period, t);
+                }
+            };
+            // The spring's stiffness ratio and tangential mass.
+            let tangential = spring.then(|| {
+                (
+                    stiffness_ratio(&ha.material, &hb.material),
+                    Self::tangential_mass(world, (ca, ha), (cb, hb)),
+                )
+            });
+            if let Some((kappa, m_t)) = tangential {
+                resolve(t_h * (m_t / (kappa * m_star)).sqrt());
+            }
+            // A live contact may be far stiffer than Hertz's sphere of the bounding radii (a face
+            // on a face): its own stiffness's half-periods, normal and tangential, count too.
+            if let Some(k_n) = self.contact(ca, cb).map(|s| s.normal_stiffness).filter(|k| *k > 0.0)
+            {
+                resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
+                if let Some((kappa, m_t)) = tangential {
+                    resolve(core::f64::consts::PI * (m_t / (kappa * k_n)).sqrt());
+                }
+            }
+            if worst.as_ref().is_none_or(|w| limit.0 < w.0) {
+                worst = Some((limit.0, limit.1, format!("colliders {ca:?} and {cb:?}")));
+            }
+        }
+        let Some((recommended, contact_time, pair)) = worst else {
+            return Ok(match self.policy {
+                StepPolicy::Fixed { substeps } => substeps.max(1),
+                StepPolicy::AutoSubstep { .. } => 1,
+            });
+        };
+        let needed = (dt / recommended).ceil().max(1.0) as usize;
+        let (allowed, chosen) = match self.policy {
+            StepPolicy::Fixed { substeps } => (substeps.max(1), substeps.max(1)),
+            StepPolicy::AutoSubstep { max_substeps } => (max_substeps.max(1), needed),
+        };
+        if needed > allowed {
+            return Err(Error::TimeStepTooLarge {
+                dt,
+                recommended,
+                contact_time,
+                substeps_needed: needed,
+                pair,
+            });
+        }
+        Ok(chosen.max(needed))
+    }
+}
