@@ -44,9 +44,6 @@ mod substeps;
 
 use hooks::Hooks;
 
-/// The drop-in's maps, keyed by handles: a fixed-seed fast hash (see `Cargo.toml`).
-type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
-
 use rapier3d_f64::prelude::{
     ActiveHooks, Collider, ColliderHandle, ContactModificationContext, EventHandler,
     PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodyType, SolverFlags,
@@ -65,6 +62,9 @@ use crate::periodic::{PeriodicBox, Sphere};
 use crate::shape::{ConvexShape, Sdf};
 use crate::tangential::{stiffness_ratio, TangentialLaw};
 use neighbours::NeighbourList;
+
+/// The drop-in's maps, keyed by handles: a fixed-seed fast hash (see `Cargo.toml`).
+type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
 
 /// What to do when the user's step cannot resolve a contact.
 #[derive(Clone, Copy, Debug, PartialEq)]
