@@ -1,0 +1,112 @@
+//! Convex shapes as signed distance functions (SDFs).
+//!
+//! Every shape is evaluated in its own body frame: [`Sdf::distance`] is negative inside, positive
+//! outside, and its magnitude is the Euclidean distance to the surface on *both* sides (an exact
+//! SDF). The overlap geometry relies on this: `max(d_A, d_B)` is then a 1-Lipschitz lower bound
+//! of the distance to the overlap region, so sphere tracing never steps through it.
+//!
+//! Built-in shapes ([`ConvexShape`]) have closed-form distances and gradients; parry shapes are
+//! converted with [`ConvexShape::from_parry`]; any other convex body is a user closure
+//! ([`ConvexShape::custom`]).
+
+use parry3d_f64::bounding_volume::Aabb;
+
+use crate::math::{Real, Vector};
+
+mod convex;
+mod custom;
+mod parry;
+mod polyhedron;
+
+pub use convex::ConvexShape;
+pub use custom::CustomSdf;
+pub use polyhedron::PolyhedronSdf;
+
+/// A signed distance function of a convex body, in the body's own frame.
+pub trait Sdf: Send + Sync {
+    /// Signed distance from `p` (body frame) to the surface: negative inside.
+    fn distance(&self, p: Vector) -> Real;
+
+    /// Outward unit gradient of the distance at `p` (body frame).
+    ///
+    /// The default uses central differences with a step of `1e-7` times the body's size.
+    fn gradient(&self, p: Vector) -> Vector {
+        let b = self.local_bounds();
+        let size = (b.maxs - b.mins).min_element();
+        let h = if size.is_finite() && size > 0.0 {
+            1e-7 * size
+        } else {
+            1e-7 * (1.0 + p.abs().max_element())
+        };
+        let g = Vector::new(
+            self.distance(p + Vector::X * h) - self.distance(p - Vector::X * h),
+            self.distance(p + Vector::Y * h) - self.distance(p - Vector::Y * h),
+            self.distance(p + Vector::Z * h) - self.distance(p - Vector::Z * h),
+        );
+        g.normalize_or_zero()
+    }
+
+    /// Bounding box of the body in its frame; components may be infinite (a half-space).
+    fn local_bounds(&self) -> Aabb;
+
+    /// A sphere `(centre, radius)` enclosing the body, in its frame; the radius is infinite
+    /// for an unbounded body. The default encloses [`local_bounds`](Self::local_bounds) (its
+    /// half diagonal, √3 times a ball's radius); the built-in shapes give a tighter one (a
+    /// ball's own), which keeps contact candidates and sub-step estimates to the pairs that
+    /// can touch.
+    fn bounding_sphere(&self) -> (Vector, Real) {
+        box_sphere(&self.local_bounds())
+    }
+
+    /// Where the surface dilated by `offset` — the zero level of `distance − offset` — crosses
+    /// the segment `p`–`q` (body frame), as the fraction `t ∈ [0, 1]` of the way from `p`, for
+    /// shapes that know it in closed form. Called only when `p` lies strictly inside
+    /// (`distance(p) < offset`) and `q` strictly outside: the caller knows which end is which,
+    /// so the shape need not evaluate its distance to find out. `None` (the default) lets the
+    /// caller find the crossing by root finding on [`distance`](Self::distance).
+    fn segment_crossing(&self, p: Vector, q: Vector, offset: Real) -> Option<Real> {
+        let _ = (p, q, offset);
+        None
+    }
+
+    /// The radius, when the body is a sphere about its frame's origin (for the closed-form
+    /// overlap of [`OverlapSettings::with_closed_form_spheres`](crate::OverlapSettings::with_closed_form_spheres));
+    /// `None` (the default) otherwise.
+    fn sphere_radius(&self) -> Option<Real> {
+        None
+    }
+
+    /// The face planes `(n, h)` — outward normal and offset, `n·p <= h` inside — when the
+    /// body is the intersection of finitely many half-spaces (for the exact overlap of
+    /// [`OverlapSettings::with_exact_polyhedra`](crate::OverlapSettings::with_exact_polyhedra));
+    /// `None` (the default) otherwise. The normal need not be unit (the overlap scales `n` and
+    /// `h` together); a zero or non-finite plane sends the pair to the `N_c` grid instead.
+    fn face_planes(&self) -> Option<Vec<(Vector, Real)>> {
+        None
+    }
+
+    /// The outward unit normal, when the body is the half-space `n·x <= 0` of its frame (for
+    /// the same closed form); `None` (the default) otherwise.
+    fn half_space_normal(&self) -> Option<Vector> {
+        None
+    }
+
+    /// Whether the surface may have edges or corners. `true` (the default) unless it is smooth
+    /// (a ball, a capsule) or flat (a half-space); `false` lets the sub-cell grid skip its test
+    /// for cells an edge or a corner passes through, which then integrate better by the
+    /// body's tangent planes than by interpolation (see
+    /// [`IntegrationMode::Subcell`](crate::IntegrationMode::Subcell)).
+    fn has_edges(&self) -> bool {
+        true
+    }
+}
+
+/// The sphere through the corners of `b` (`(centre, radius)`); radius infinite for an
+/// unbounded box.
+fn box_sphere(b: &Aabb) -> (Vector, Real) {
+    if b.mins.is_finite() && b.maxs.is_finite() {
+        ((b.mins + b.maxs) * 0.5, (b.maxs - b.mins).length() * 0.5)
+    } else {
+        (Vector::ZERO, Real::INFINITY)
+    }
+}

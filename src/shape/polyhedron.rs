@@ -1,0 +1,217 @@
+//! Convex polyhedra (parry's `ConvexPolyhedron`, convex hulls of points) with an exact SDF.
+
+use parry3d_f64::bounding_volume::Aabb;
+
+use crate::error::{check_finite_vec, Error, Result};
+use crate::math::{Real, Vector};
+
+/// A convex polyhedron with an exact SDF: inside, the largest face-plane distance; outside,
+/// the distance to the nearest point of the surface (see `distance_and_gradient`).
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "checkpoint", serde(from = "PolyhedronFaces", into = "PolyhedronFaces"))]
+pub struct PolyhedronSdf {
+    /// Outward unit normal and offset of each face plane (`n·p - offset` is the plane distance).
+    pub(super) planes: Vec<(Vector, Real)>,
+    /// Each face's vertices, ordered around the face.
+    pub(super) faces: Vec<Vec<Vector>>,
+    /// Each face's edges, face after face in the order of `faces` (see [`FaceEdge`]).
+    edges: Vec<FaceEdge>,
+    /// Where each face's edges begin in `edges`, and their end.
+    edge_start: Vec<usize>,
+    pub(super) bounds: Aabb,
+}
+
+/// An edge of a face, `a → a + e` in the face's counter-clockwise order, with the face's side
+/// plane through it: `o·p <= c` on the face's side, `o` the edge direction turned outward in
+/// the face's plane. A point projects into a face when it lies on the inner side of every side
+/// plane, which needs no projection: the side planes contain the face's normal.
+#[derive(Clone, Copy, Debug)]
+struct FaceEdge {
+    a: Vector,
+    e: Vector,
+    o: Vector,
+    c: Real,
+}
+
+/// What a polyhedron's checkpoint holds: its faces; the edges are rebuilt from them.
+#[cfg(feature = "checkpoint")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PolyhedronFaces {
+    planes: Vec<(Vector, Real)>,
+    faces: Vec<Vec<Vector>>,
+    bounds: Aabb,
+}
+
+#[cfg(feature = "checkpoint")]
+impl From<PolyhedronFaces> for PolyhedronSdf {
+    fn from(f: PolyhedronFaces) -> Self {
+        Self::from_faces(f.planes, f.faces, f.bounds)
+    }
+}
+
+#[cfg(feature = "checkpoint")]
+impl From<PolyhedronSdf> for PolyhedronFaces {
+    fn from(p: PolyhedronSdf) -> Self {
+        Self { planes: p.planes, faces: p.faces, bounds: p.bounds }
+    }
+}
+
+impl PolyhedronSdf {
+    /// Builds the SDF of the convex hull of `points` (at least 4 points, not coplanar).
+    pub fn from_points(points: &[Vector]) -> Result<Self> {
+        for p in points {
+            check_finite_vec("polyhedron vertex", *p)?;
+        }
+        let hull = parry3d_f64::shape::ConvexPolyhedron::from_convex_hull(points).ok_or(
+            Error::UnsupportedShape {
+                shape: "ConvexPolyhedron".into(),
+                why: "the points do not span a volume (need at least 4 non-coplanar points)",
+            },
+        )?;
+        let sdf = Self::from_parry(&hull);
+        // Divergence theorem: V = Σ offset·area / 3 over the faces.
+        let volume: Real = sdf
+            .planes
+            .iter()
+            .zip(&sdf.faces)
+            .map(|((n, off), v)| {
+                let area = (1..v.len() - 1)
+                    .map(|i| (v[i] - v[0]).cross(v[i + 1] - v[0]).dot(*n))
+                    .sum::<Real>()
+                    * 0.5;
+                off * area / 3.0
+            })
+            .sum();
+        let size = (sdf.bounds.maxs - sdf.bounds.mins).length();
+        if !(volume > 1e-12 * size * size * size) {
+            return Err(Error::UnsupportedShape {
+                shape: "ConvexPolyhedron".into(),
+                why: "the points do not span a volume (need at least 4 non-coplanar points)",
+            });
+        }
+        Ok(sdf)
+    }
+
+    /// Builds the SDF of a parry convex polyhedron.
+    pub fn from_parry(poly: &parry3d_f64::shape::ConvexPolyhedron) -> Self {
+        let pts = poly.points();
+        let adj = poly.vertices_adj_to_face();
+        let mut planes = Vec::with_capacity(poly.faces().len());
+        let mut faces = Vec::with_capacity(poly.faces().len());
+        for f in poly.faces() {
+            let first = f.first_vertex_or_edge as usize;
+            let mut verts: Vec<Vector> = adj[first..first + f.num_vertices_or_edges as usize]
+                .iter()
+                .map(|&i| pts[i as usize])
+                .collect();
+            let n = f.normal;
+            let centre = verts.iter().copied().sum::<Vector>() / verts.len() as Real;
+            // Order the vertices counter-clockwise about the outward normal.
+            let u = (verts[0] - centre).normalize_or_zero();
+            let v = n.cross(u);
+            verts.sort_by(|a, b| {
+                let (da, db) = (*a - centre, *b - centre);
+                let aa = da.dot(v).atan2(da.dot(u));
+                let ab = db.dot(v).atan2(db.dot(u));
+                aa.total_cmp(&ab)
+            });
+            planes.push((n, n.dot(centre)));
+            faces.push(verts);
+        }
+        let mut mins = Vector::splat(Real::INFINITY);
+        let mut maxs = Vector::splat(Real::NEG_INFINITY);
+        for p in pts {
+            mins = mins.min(*p);
+            maxs = maxs.max(*p);
+        }
+        Self::from_faces(planes, faces, Aabb::new(mins, maxs))
+    }
+
+    /// From the face planes, each face's counter-clockwise vertices and the bounds.
+    fn from_faces(planes: Vec<(Vector, Real)>, faces: Vec<Vec<Vector>>, bounds: Aabb) -> Self {
+        let edges = planes
+            .iter()
+            .zip(&faces)
+            .flat_map(|(&(n, _), verts)| {
+                let m = verts.len();
+                (0..m).map(move |i| {
+                    let (a, e) = (verts[i], verts[(i + 1) % m] - verts[i]);
+                    let o = e.cross(n);
+                    FaceEdge { a, e, o, c: o.dot(a) }
+                })
+            })
+            .collect();
+        let edge_start = std::iter::once(0)
+            .chain(faces.iter().scan(0, |end, f| {
+                *end += f.len();
+                Some(*end)
+            }))
+            .collect();
+        Self { planes, faces, edges, edge_start, bounds }
+    }
+
+    /// Distance and outward gradient.
+    ///
+    /// Outside, the nearest point `q` of a convex body is the one with `p − q` in the normal
+    /// cone at `q`. So a face whose plane sees `p` and into which `p` projects gives it: its
+    /// projection. Failing that, `q` lies on an edge, and on one that `p` lies beyond as seen
+    /// from a face whose plane sees it (of the edge's two faces, at least one sees `p`, and `p`
+    /// lies on the outer side of that face's side plane through the edge): only those edges'
+    /// segments are measured, and the farthest plane's face, the likeliest, is tried first.
+    pub(super) fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
+        let (mut farthest, mut face) = (Real::NEG_INFINITY, 0);
+        for (k, (n, off)) in self.planes.iter().enumerate() {
+            let s = n.dot(p) - off;
+            if s > farthest {
+                (farthest, face) = (s, k);
+            }
+        }
+        let best = (farthest, self.planes[face].0);
+        if farthest <= 0.0 {
+            return best;
+        }
+        let face_edges = |k: usize| &self.edges[self.edge_start[k]..self.edge_start[k + 1]];
+        let beyond = |e: &FaceEdge| e.o.dot(p) > e.c;
+        if !face_edges(face).iter().any(beyond) {
+            return best;
+        }
+        let mut out = (Real::INFINITY, best.1);
+        for (k, (n, off)) in self.planes.iter().enumerate() {
+            let s = n.dot(p) - off;
+            // A face that does not see `p`, or no nearer than the nearest point so far.
+            if s <= 0.0 || s >= out.0 {
+                continue;
+            }
+            let mut inside = true;
+            for e in face_edges(k).iter().filter(|e| beyond(e)) {
+                inside = false;
+                let q = closest_on_segment(p, e.a, e.a + e.e);
+                let d = (p - q).length();
+                if d < out.0 {
+                    // Within round-off of an edge, `p − q` has no direction: the face's normal
+                    // is then as good a (sub)gradient there.
+                    out = (
+                        d,
+                        if d > 1e-9 * (self.bounds.maxs - self.bounds.mins).max_element() {
+                            (p - q) / d
+                        } else {
+                            *n
+                        },
+                    );
+                }
+            }
+            if inside {
+                return (s, *n);
+            }
+        }
+        out
+    }
+}
+
+pub(super) fn closest_on_segment(p: Vector, a: Vector, b: Vector) -> Vector {
+    let e = b - a;
+    let l2 = e.length_squared();
+    let t = if l2 > 0.0 { ((p - a).dot(e) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    a + e * t
+}
