@@ -189,6 +189,12 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         self.rot * self.shape.gradient(self.rot_t * (x - self.origin))
     }
 
+    /// Distance and gradient at `x` in one call ([`Sdf::distance_and_gradient`]).
+    fn distance_and_gradient(&self, x: Vector) -> (Real, Vector) {
+        let (d, g) = self.shape.distance_and_gradient(self.rot_t * (x - self.origin));
+        (d - self.eps, self.rot * g)
+    }
+
     /// [`Sdf::has_edges`] of the shape.
     fn has_edges(&self) -> bool {
         self.shape.has_edges()

@@ -655,18 +655,37 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         for (i, v) in c.iter().enumerate() {
             points[1 + i] = (v.x, v.d);
         }
+        // The face centres' distances come with their gradients (one call each).
+        let mut face_gradients = [[Vector::ZERO; 6]; 2];
         for f in 0..6 {
             let mut x = mid;
             x[f % 3] = if f < 3 { c[0].x[f % 3] } else { c[7].x[f % 3] };
-            let d = |s: usize| if samples[s] == SAMPLES { self.distance(s, x) } else { Real::NAN };
-            points[9 + f] = (x, [d(0), d(1)]);
+            let mut d = [Real::NAN; 2];
+            for s in 0..2 {
+                if samples[s] == SAMPLES {
+                    let (ds, gs) = if s == 0 {
+                        self.pair.a.distance_and_gradient(x)
+                    } else {
+                        self.pair.b.distance_and_gradient(x)
+                    };
+                    d[s] = ds;
+                    face_gradients[s][f] = gs;
+                }
+            }
+            points[9 + f] = (x, d);
         }
         let mut planes = [Plane { n: Vector::ZERO, h: 0.0, body: 0 }; 2 * SAMPLES];
         let mut len = 0;
         let tol = 1e-12 * (c[7].x - c[0].x).length();
         for s in 0..2 {
-            for &(x, d) in &points[..samples[s]] {
-                let g = if s == 0 { self.pair.a.gradient(x) } else { self.pair.b.gradient(x) };
+            for (k, &(x, d)) in points[..samples[s]].iter().enumerate() {
+                let g = if k >= 9 {
+                    face_gradients[s][k - 9]
+                } else if s == 0 {
+                    self.pair.a.gradient(x)
+                } else {
+                    self.pair.b.gradient(x)
+                };
                 // A user SDF's gradient may be a finite difference: the plane needs a unit normal.
                 let g = g.normalize_or_zero();
                 if !(g.is_finite() && g != Vector::ZERO) {

@@ -393,6 +393,10 @@ impl Sdf for ConvexShape {
         self.distance_and_gradient(p).1
     }
 
+    fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
+        ConvexShape::distance_and_gradient(self, p)
+    }
+
     /// Closed forms, one evaluation instead of ~4–5 distance calls of root finding, and exact:
     /// the half-space (linear), the ball (a quadratic) and the capsule (piecewise quadratic)
     /// also dilated; the cuboid, the cylinder and the polyhedron undilated (`offset = 0`), as

@@ -27,6 +27,13 @@ pub trait Sdf: Send + Sync {
     /// Signed distance from `p` (body frame) to the surface: negative inside.
     fn distance(&self, p: Vector) -> Real;
 
+    /// The distance and the gradient at `p` together: what a caller that needs both asks, so a
+    /// shape that finds both in one pass (a polyhedron's nearest feature) computes it once. The
+    /// default calls [`distance`](Self::distance) and [`gradient`](Self::gradient).
+    fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
+        (self.distance(p), self.gradient(p))
+    }
+
     /// Outward unit gradient of the distance at `p` (body frame).
     ///
     /// The default uses central differences with a step of `1e-7` times the body's size.
