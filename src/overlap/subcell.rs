@@ -201,6 +201,10 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     edges: [bool; 2],
     /// Buffers of the tangent-plane clip, reused from cell to cell.
     scratch: crease::Scratch,
+    /// Each grid node's gradients, A's and B's, once a tangent-plane cell has asked for them
+    /// (a node is a corner of up to eight such cells); NaN until then. Empty when neither body
+    /// has edges (no cell is clipped by tangent planes at its corners).
+    node_gradients: Vec<[Vector; 2]>,
 }
 
 /// Volume, moment, normal and bounds summed over the clipped pieces.
@@ -507,6 +511,11 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         sums,
         edges: [pair.a.has_edges(), pair.b.has_edges()],
         scratch: crease::Scratch::new(),
+        node_gradients: if pair.a.has_edges() || pair.b.has_edges() {
+            vec![[Vector::NAN; 2]; values.len()]
+        } else {
+            Vec::new()
+        },
     };
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
@@ -645,7 +654,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     /// points on each of its faces' sides among them, and a corner reaching in has its faces'
     /// nearest points.
     fn tangent_planes(
-        &self,
+        &mut self,
         c: &[Vert; 8],
         samples: [usize; 2],
         centre: [Real; 2],
@@ -679,12 +688,23 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         let tol = 1e-12 * (c[7].x - c[0].x).length();
         for s in 0..2 {
             for (k, &(x, d)) in points[..samples[s]].iter().enumerate() {
+                let gradient = |x: Vector| {
+                    if s == 0 {
+                        self.pair.a.gradient(x)
+                    } else {
+                        self.pair.b.gradient(x)
+                    }
+                };
                 let g = if k >= 9 {
                     face_gradients[s][k - 9]
-                } else if s == 0 {
-                    self.pair.a.gradient(x)
+                } else if (1..9).contains(&k) && c[k - 1].node() != NOT_A_NODE {
+                    let node = c[k - 1].node() as usize;
+                    if self.node_gradients[node][s].is_nan() {
+                        self.node_gradients[node][s] = gradient(x);
+                    }
+                    self.node_gradients[node][s]
                 } else {
-                    self.pair.b.gradient(x)
+                    gradient(x)
                 };
                 // A user SDF's gradient may be a finite difference: the plane needs a unit normal.
                 let g = g.normalize_or_zero();
