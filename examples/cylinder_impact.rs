@@ -1,4 +1,4 @@
-//! Oblique cylinder–wall impact (seed 000 Fig. 6, Park 2003) in the rapier pipeline:
+//! Oblique cylinder–wall impact (Marquardt et al. Fig. 6, Park 2003) in the rapier pipeline:
 //! θ = 0°…90° in 5° steps, N_c ∈ {2, 4, 8, 16}, both integration modes.
 //!
 //! Writes `target/validation/cylinder_impact.csv` and `cylinder_impact.png`, and prints the

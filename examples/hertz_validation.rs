@@ -1,4 +1,4 @@
-//! Static normal force against Hertz for the eight cases of seed 000 Fig. 3, both integration
+//! Static normal force against Hertz for the eight cases of Marquardt et al. Fig. 3, both integration
 //! modes, N_c = 2…32: error against run time.
 //!
 //! Writes `target/validation/hertz_error.csv`, `hertz_force.csv` and `hertz_validation.png`.

@@ -1,10 +1,10 @@
-//! Hindered settling of spheres and cubes in a triply periodic box (seed 002 §5): rapier
+//! Hindered settling of spheres and cubes in a triply periodic box (Marquardt, Hafen & Krause §5): rapier
 //! bodies, the HLBM fluid and periodic discrete contacts four-way coupled. Compares the mean
 //! settling velocity with Richardson–Zaki and Garside–Al-Dibouni, with and without contacts.
 //!
 //! ```text
 //! cargo run --release --example hindered_settling -- --quick      # minutes: D = 6 Δx, box 8 D, Ar = 1000
-//! cargo run --release --example hindered_settling                 # seed 002: D = 9 Δx, box 15 D (hours)
+//! cargo run --release --example hindered_settling                 # Marquardt, Hafen & Krause: D = 9 Δx, box 15 D (hours)
 //! cargo run --release --example hindered_settling -- --peer-case  # seconds per step on the OpenLB case
 //! ```
 //! Options: `--phi 0.1,0.2,0.3`, `--ar 500,1000,2000`, `--shapes sphere,cube` (cubes at the
@@ -229,7 +229,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 && r.case.archimedes == c.case.archimedes
         }) {
             println!(
-                "cubes at φ = {}, Ar = {}: {:.1} % slower than spheres (seed 002: 13 % at low φ to 26 % at high φ)",
+                "cubes at φ = {}, Ar = {}: {:.1} % slower than spheres (Marquardt, Hafen & Krause: 13 % at low φ to 26 % at high φ)",
                 c.case.volume_fraction,
                 c.case.archimedes,
                 100.0 * (1.0 - c.result.v_mean_over_vs / s.result.v_mean_over_vs)
@@ -326,7 +326,7 @@ fn seed_case(
     Ok(c)
 }
 
-/// The peer case (seed 002's study as in its authors' public example): 15 D box, D = 9 Δx,
+/// The peer case (Marquardt, Hafen & Krause's study as in its authors' public example): 15 D box, D = 9 Δx,
 /// φ = 15 % and 30 %, with and without contacts, `--peer-steps` steps each; seconds per step
 /// and MLUPs beside OpenLB 1.9's on this kind of machine.
 fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {

@@ -1,5 +1,5 @@
 //! A steel sphere falling through glycerol–water onto the floor of a closed box and bouncing
-//! (seed 000 §5, the experiment of Li 2010): rapier body, HLBM fluid and discrete contact
+//! (Marquardt et al. §5, the experiment of Li 2010): rapier body, HLBM fluid and discrete contact
 //! four-way coupled. Runs each release gap at two resolutions with the contact, and at the
 //! finer one without it (no rebound — the paper's point).
 //!
@@ -259,7 +259,7 @@ fn report(case: &WetRebound, t: &Trajectory) {
     }
 }
 
-/// Gap over time like seed 000's Fig. 7: finest resolution solid, coarser thin, no contact
+/// Gap over time like Marquardt et al.'s Fig. 7: finest resolution solid, coarser thin, no contact
 /// dashed.
 fn plot(
     path: &std::path::Path,

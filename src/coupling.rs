@@ -2,7 +2,7 @@
 //!
 //! The bodies stay in the user's rapier [`PhysicsWorld`] — the one source of truth for their
 //! poses and velocities, so the same scene and the same [`DiscreteContacts`] serve dry and wet
-//! runs. One [`Fluid::step`] is seed 000's Algorithm 2:
+//! runs. One [`Fluid::step`] is Marquardt et al.'s Algorithm 2:
 //!
 //! 1. every coupled body is written onto the lattice from its SDF: the solid fraction
 //!    `d_B = cos²(π/2 (d/ε + 1/2))` in the smoothing band of width `ε`, 1 inside, at each node

@@ -1,4 +1,4 @@
-//! The Nassauer–Kuna force law (DESIGN §3): normal force from overlap volume and indentation
+//! The Nassauer–Kuna force law (): normal force from overlap volume and indentation
 //! with restitution damping, friction (the slip-speed law here, the tangential spring in
 //! [`tangential`]), torques on both bodies.
 

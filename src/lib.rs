@@ -1,6 +1,6 @@
 //! # discrete-contact
 //!
-//! Discrete overlap-volume contacts (Nassauer & Kuna 2013, as discretised in seed 000) for
+//! Discrete overlap-volume contacts (Nassauer & Kuna 2013, as discretised in Marquardt et al.) for
 //! arbitrarily shaped convex rigid bodies given as signed distance functions.
 //!
 //! Data flows one way: body pose → [`shape`] (SDF) → [`overlap`] (volume, contact point,

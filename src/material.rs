@@ -46,7 +46,7 @@ impl Material {
     }
 }
 
-/// Effective modulus `E*` of a pair: `1/E* = (1 - nu_A^2)/E_A + (1 - nu_B^2)/E_B` (DESIGN §3, fixed).
+/// Effective modulus `E*` of a pair: `1/E* = (1 - nu_A^2)/E_A + (1 - nu_B^2)/E_B` (corrected; see `docs/design.md`).
 pub fn effective_modulus(a: &Material, b: &Material) -> Real {
     1.0 / (a.compliance() + b.compliance())
 }
@@ -208,7 +208,7 @@ pub struct PairParameters {
     pub restitution: Real,
     /// Friction; [`Friction::NONE`] skips the tangential force.
     pub friction: Friction,
-    /// Which tangential law applies the friction; [`TangentialLaw::SlipSpeed`] (the seeds')
+    /// Which tangential law applies the friction; [`TangentialLaw::SlipSpeed`] (the papers')
     /// unless set.
     pub tangential: TangentialLaw,
     /// Mindlin's `κ = k_t / k_n` of the two materials, the tangential spring's stiffness ratio

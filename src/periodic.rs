@@ -5,7 +5,7 @@
 //! periodic face it is moved back by one box length (velocities untouched). Near a face it is
 //! *seen* on both sides — a pair is evaluated between A and the **nearest image** of B
 //! (the minimum-image convention), on A's side, A being the body that comes first in a fixed
-//! order (seed 002 takes the lower id); B's pose is shifted there for the evaluation and the
+//! order (Marquardt, Hafen & Krause take the lower id); B's pose is shifted there for the evaluation and the
 //! force, which does not depend on where the pair sits, is applied to B where it is. A
 //! persistent contact keeps its state across the shift: its box lives in a body frame, so it is
 //! unchanged when either body is moved back into the box.

@@ -35,7 +35,7 @@ use crate::math::{Pose, Real, Vector};
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub enum TangentialLaw {
     /// Nassauer & Kuna's regularised Coulomb law: the force is a function of the slip speed
-    /// alone ([`Friction::coefficient`]), zero at zero slip. The seeds' model, kept for the
+    /// alone ([`Friction::coefficient`]), zero at zero slip. The papers' model, kept for the
     /// validations that use it; a body at rest under a tangential load creeps.
     SlipSpeed,
     /// The tangential spring of this module: sticks below `μ_s F_n`, slides at `μ_k F_n`; a box

@@ -109,7 +109,7 @@ fn a_box_holds_on_a_slope_below_the_friction_angle() {
 
 #[test]
 fn the_slip_speed_law_lets_the_same_box_creep() {
-    // The seeds' law vanishes at zero slip: the contrast that makes the test above meaningful.
+    // The papers' law vanishes at zero slip: the contrast that makes the test above meaningful.
     let mut s = box_on_slope(20.0, TangentialLaw::SlipSpeed);
     let x = s.run(2.0);
     assert!(

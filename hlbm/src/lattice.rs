@@ -44,7 +44,7 @@ pub struct ParticleForce {
 
 /// How the sweep measures the fluid's force on a particle (both in the same sweep, both
 /// deterministic; the fluid itself evolves the same either way). The default is the momentum
-/// exchange, the method of the HLBM papers (DESIGN §5).
+/// exchange, the method of the HLBM papers.
 ///
 /// With `V_R` the particle's nodes (`d_B > 0`), `ρ`, `Δu` the EDM velocity change of a node and
 /// `g` the lattice's body acceleration:

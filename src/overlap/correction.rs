@@ -1,4 +1,4 @@
-//! Algorithm 1 of seed 000: shrink a rough box to the overlap by sphere tracing from its surface.
+//! Algorithm 1 of Marquardt et al.: shrink a rough box to the overlap by sphere tracing from its surface.
 
 use parry3d_f64::bounding_volume::Aabb;
 

@@ -1,4 +1,4 @@
-//! The paper's integration (seed 000 §3.3.3): count the grid nodes inside both bodies.
+//! The paper's integration (Marquardt et al. §3.3.3): count the grid nodes inside both bodies.
 
 use super::{Grid, Integral, Pair};
 use crate::math::{Real, Vector};

@@ -1,4 +1,4 @@
-//! Overlap geometry of two convex bodies (DESIGN §2): rough box → box search and Algorithm-1
+//! Overlap geometry of two convex bodies (): rough box → box search and Algorithm-1
 //! correction → integration on an `N_c` grid → overlap volume, contact point, normal and
 //! indentation.
 //!
@@ -48,7 +48,7 @@ use crate::shape::Sdf;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub enum IntegrationMode {
-    /// Node counting, as in seed 000 (first order in `N_c`).
+    /// Node counting, as in Marquardt et al. (first order in `N_c`).
     Count,
     /// Piecewise-linear sub-cell integration (second order in `N_c`): exact surface crossings
     /// on the grid's edges, and the bodies' tangent planes in cells an edge or a corner of a

@@ -258,7 +258,7 @@ impl DiscreteContacts {
 
     /// Refuse a pair (with [`Error::ContactTooSoft`]) when Hertz puts its deepest indentation
     /// beyond `fraction` of the smaller body's smallest half-extent, `0 < fraction <= 1`
-    /// (default 0.5). Softened materials — seed 002 runs E = 5 kPa particles so that contacts
+    /// (default 0.5). Softened materials — Marquardt, Hafen & Krause run E = 5 kPa particles so that contacts
     /// span many fluid steps — need a larger fraction.
     pub fn with_indentation_limit(mut self, fraction: Real) -> Result<Self> {
         self.indentation_limit = crate::error::check_range(
@@ -292,7 +292,7 @@ impl DiscreteContacts {
     }
 
     /// With another tangential law for the friction (the default is
-    /// [`TangentialLaw::Spring`]; [`TangentialLaw::SlipSpeed`] is the seeds' model).
+    /// [`TangentialLaw::Spring`]; [`TangentialLaw::SlipSpeed`] is the papers' model).
     pub fn with_tangential_law(mut self, law: TangentialLaw) -> Self {
         self.tangential = law;
         self

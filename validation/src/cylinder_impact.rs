@@ -1,4 +1,4 @@
-//! Oblique impact of a cylinder on a wall (seed 000 §4.2, Park 2003; DESIGN §6), run in the
+//! Oblique impact of a cylinder on a wall (Marquardt et al. §4.2, Park 2003), run in the
 //! rapier pipeline through [`DiscreteContacts`].
 //!
 //! H = 5.3 mm, R = 4 mm, m = 3.1e-4 kg, I_xx = I_zz = 1.96566e-9 kg m² (about diameters),

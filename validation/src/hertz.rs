@@ -1,4 +1,4 @@
-//! The eight static Hertz cases of seed 000 §4.1 / Fig. 3 (DESIGN §6).
+//! The eight static Hertz cases of Marquardt et al. §4.1 / Fig. 3.
 //!
 //! Body A is elastic (`E_A = 0.01 GPa, ν_A = 0.5`), body B stiff (`E_B = 200 GPa, ν_B = 0.3`).
 //! A is pushed into B along `+y` by the indentation `d`; the force is compared with Hertz
@@ -47,7 +47,7 @@ pub enum HertzCase {
 }
 
 impl HertzCase {
-    /// The eight cases of seed 000 Fig. 3, in its order.
+    /// The eight cases of Marquardt et al. Fig. 3, in its order.
     pub fn all() -> [HertzCase; 8] {
         [
             Self::SphereHalfSpace { r: 1.0 },
@@ -71,7 +71,7 @@ impl HertzCase {
         }
     }
 
-    /// The materials of seed 000 §4.1: (A, B).
+    /// The materials of Marquardt et al. §4.1: (A, B).
     pub fn materials() -> (Material, Material) {
         (Material::new(0.01e9, 0.5).expect("valid"), Material::new(200e9, 0.3).expect("valid"))
     }

@@ -1,4 +1,4 @@
-//! Hindered settling of many spheres or cubes in a triply periodic box (seed 002 §5, DESIGN §6):
+//! Hindered settling of many spheres or cubes in a triply periodic box (Marquardt, Hafen & Krause §5):
 //! rapier bodies, the HLBM fluid and periodic discrete contacts in one four-way coupled step.
 //!
 //! The particles are placed at random without overlap, released from rest, and settle along

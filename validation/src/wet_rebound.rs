@@ -1,5 +1,5 @@
 //! A sphere released in a viscous liquid, falling onto the floor of a closed box and bouncing
-//! (seed 000 §5, the experiment of Li 2010; DESIGN §6), four-way coupled: rapier bodies, the
+//! (Marquardt et al. §5, the experiment of Li 2010), four-way coupled: rapier bodies, the
 //! HLBM fluid and the discrete contact in one step.
 //!
 //! [`WetRebound::li_2010`] holds the experiment's values; every field can be changed, so other
@@ -59,7 +59,7 @@ pub struct WetRebound {
 }
 
 impl WetRebound {
-    /// Li (2010) as in seed 000: steel sphere R = 4.75 mm, ρ_p = 7780 kg/m³ in a glycerol–water
+    /// Li (2010) as in Marquardt et al.: steel sphere R = 4.75 mm, ρ_p = 7780 kg/m³ in a glycerol–water
     /// mixture ρ = 1230 kg/m³, μ = 50.2 mPa s; box 42 × 42 × 50 mm; E = 20 GPa / ν = 0.33
     /// (sphere), 3 GPa / 0.24 (wall); N_c = 16; enlargement Δx/7. Seed 000 uses a constant
     /// damping c = 0.12 s/m, which at the impact speeds here (0.2–0.6 m/s) is a dry restitution of
