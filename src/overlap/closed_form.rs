@@ -11,7 +11,7 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
-use super::OverlapGeometry;
+use super::{Exact, OverlapGeometry};
 use crate::math::{Pose, Real, Vector};
 use crate::shape::Sdf;
 
@@ -28,23 +28,24 @@ fn cap_centroid(h: Real, r: Real) -> Real {
 }
 
 /// The overlap of `a` and `b` (dilated by `eps`) when both are spheres, or one a sphere and the
-/// other a half-space: `Some(Some(g))` when they overlap partly, `Some(None)` when they are
-/// apart. `None` when the pair is of another kind or the configuration is one the closed form
-/// does not cover (one body inside the other, concentric spheres): the caller integrates on the
-/// grid then.
+/// other a half-space: [`Exact::Overlap`] when they overlap partly, [`Exact::Apart`] when they
+/// are apart, [`Exact::Uncovered`] when the pair is of another kind or the configuration is one
+/// the closed form does not cover (one body inside the other, concentric spheres): the caller
+/// integrates on the grid then.
 pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     a: &A,
     pose_a: &Pose,
     b: &B,
     pose_b: &Pose,
     eps: [Real; 2],
-) -> Option<Option<OverlapGeometry>> {
+) -> Exact {
     match (a.sphere_radius(), b.sphere_radius()) {
         (Some(ra), Some(rb)) => {
             lens(pose_a.translation, ra + eps[0], pose_b.translation, rb + eps[1], pose_b)
         }
         (Some(ra), None) => {
-            let n = pose_b.rotation * b.half_space_normal()?;
+            let Some(normal) = b.half_space_normal() else { return Exact::Uncovered };
+            let n = pose_b.rotation * normal;
             // The half-space `n·(x − t_B) <= eps_B`; A's cap beyond it, normal from B to A.
             cap_on_plane(
                 pose_a.translation,
@@ -56,7 +57,8 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             )
         }
         (None, Some(rb)) => {
-            let n = pose_a.rotation * a.half_space_normal()?;
+            let Some(normal) = a.half_space_normal() else { return Exact::Uncovered };
+            let n = pose_a.rotation * normal;
             cap_on_plane(
                 pose_b.translation,
                 rb + eps[1],
@@ -66,24 +68,18 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                 pose_b,
             )
         }
-        (None, None) => None,
+        (None, None) => Exact::Uncovered,
     }
 }
 
 /// Two spheres: A of radius `a` at `ca`, B of radius `b` at `cb`.
-fn lens(
-    ca: Vector,
-    a: Real,
-    cb: Vector,
-    b: Real,
-    pose_b: &Pose,
-) -> Option<Option<OverlapGeometry>> {
+fn lens(ca: Vector, a: Real, cb: Vector, b: Real, pose_b: &Pose) -> Exact {
     let d = (ca - cb).length();
     if d >= a + b {
-        return Some(None);
+        return Exact::Apart;
     }
     if !(d > (a - b).abs() && d > 0.0) {
-        return None;
+        return Exact::Uncovered;
     }
     let n = (ca - cb) / d;
     // Heights of A's cap (towards B) and B's cap (towards A), free of cancellation.
@@ -101,7 +97,7 @@ fn lens(
         surface_area: 2.0 * PI * (a * ha + b * hb),
         corrected_box: sphere_box(contact_point, a.min(b), pose_b),
     };
-    (volume.is_finite()).then_some((volume > 0.0).then_some(geometry))
+    decided(volume, geometry)
 }
 
 /// A sphere of radius `r` at `c` cut by the plane `m·x = offset` (the half-space below it);
@@ -113,14 +109,14 @@ fn cap_on_plane(
     offset: Real,
     normal: Vector,
     pose_b: &Pose,
-) -> Option<Option<OverlapGeometry>> {
+) -> Exact {
     let h = r - (m.dot(c) - offset);
     if h <= 0.0 {
-        return Some(None);
+        return Exact::Apart;
     }
     // Sunk past its far side (or NaN): the grid decides.
     if h >= 2.0 * r || h.is_nan() {
-        return None;
+        return Exact::Uncovered;
     }
     let volume = cap_volume(h, r);
     let contact_point = c - m * cap_centroid(h, r);
@@ -132,7 +128,19 @@ fn cap_on_plane(
         surface_area: 2.0 * PI * r * h + PI * h * (2.0 * r - h),
         corrected_box: sphere_box(contact_point, r, pose_b),
     };
-    (volume.is_finite()).then_some((volume > 0.0).then_some(geometry))
+    decided(volume, geometry)
+}
+
+/// The overlap `geometry` of a finite, positive `volume`; apart at zero; uncovered when the
+/// arithmetic broke down (NaN).
+fn decided(volume: Real, geometry: OverlapGeometry) -> Exact {
+    if !volume.is_finite() {
+        Exact::Uncovered
+    } else if volume > 0.0 {
+        Exact::Overlap(geometry)
+    } else {
+        Exact::Apart
+    }
 }
 
 /// A box in B's frame holding the overlap (a sphere of radius `r` about a point of it): the

@@ -424,6 +424,16 @@ fn blended_normal(area_vectors: [Vector; 2], areas: [Real; 2]) -> Vector {
     }
 }
 
+/// What an exact form (closed-form spheres, clipped polyhedra) says of a pair.
+pub(crate) enum Exact {
+    /// They overlap: the overlap's geometry.
+    Overlap(OverlapGeometry),
+    /// They are apart.
+    Apart,
+    /// The form does not cover this pair or this configuration: integrate on the grid.
+    Uncovered,
+}
+
 /// Result of integrating the overlap on the corrected box, before the indentation.
 pub(crate) struct Integral {
     volume: Real,
@@ -501,8 +511,10 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pose_check("pose of body A", pose_a)?;
     pose_check("pose of body B", pose_b)?;
     if settings.closed_form_spheres {
-        if let Some(decided) = closed_form::overlap(a, pose_a, b, pose_b, settings.enlargement) {
-            return Ok(decided);
+        match closed_form::overlap(a, pose_a, b, pose_b, settings.enlargement) {
+            Exact::Overlap(g) => return Ok(Some(g)),
+            Exact::Apart => return Ok(None),
+            Exact::Uncovered => {}
         }
     }
     // The grid lives in A's or B's frame, whichever gives the smaller rough box: it moves
@@ -534,8 +546,10 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         ..g
     };
     if settings.exact_polyhedra {
-        if let Some(decided) = polyhedra::overlap(&pair, &rough) {
-            return Ok(decided.map(to_world));
+        match polyhedra::overlap(&pair, &rough) {
+            Exact::Overlap(g) => return Ok(Some(to_world(g))),
+            Exact::Apart => return Ok(None),
+            Exact::Uncovered => {}
         }
     }
     let reused = previous_box.and_then(|p| {

@@ -20,7 +20,7 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
-use super::{blended_normal, OverlapGeometry, Pair};
+use super::{blended_normal, Exact, OverlapGeometry, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
 
@@ -32,14 +32,18 @@ pub(super) struct Face {
     body: Option<usize>,
 }
 
-/// The overlap of the pair when both bodies are bounded by planes: `Some(Some(g))` when they
-/// overlap (in the pair's frame), `Some(None)` when they do not. `None` when a body is not
-/// planar (or the clipping met a degenerate configuration): the caller integrates on the grid.
+/// The overlap of the pair when both bodies are bounded by planes: [`Exact::Overlap`] when they
+/// overlap (in the pair's frame), [`Exact::Apart`] when they do not, [`Exact::Uncovered`] when
+/// a body is not planar (or the clipping met a degenerate configuration): the caller
+/// integrates on the grid.
 pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     rough: &Aabb,
-) -> Option<Option<OverlapGeometry>> {
-    let mut planes: Vec<(Vector, Real, usize)> = [pair.a.planes()?, pair.b.planes()?]
+) -> Exact {
+    let (Some(planes_a), Some(planes_b)) = (pair.a.planes(), pair.b.planes()) else {
+        return Exact::Uncovered;
+    };
+    let mut planes: Vec<(Vector, Real, usize)> = [planes_a, planes_b]
         .into_iter()
         .enumerate()
         .flat_map(|(body, planes)| planes.into_iter().map(move |(n, h)| (n, h, body)))
@@ -59,7 +63,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     });
     let size = (rough.maxs - rough.mins).length();
     if !(size.is_finite() && size > 0.0) {
-        return None;
+        return Exact::Uncovered;
     }
     let tol = 1e-12 * size;
     // Clip a box a little larger than the rough box. The rough box bounds the bodies dilated
@@ -74,7 +78,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             for &(n, h, body) in &planes {
                 clip(&mut faces, n, h, body, tol);
                 if faces.is_empty() {
-                    return Some(None);
+                    return Exact::Apart;
                 }
             }
             if faces.iter().all(|f| f.body.is_some()) {
@@ -82,7 +86,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             }
             pad = 4.0 * pad + size;
         }
-        return None;
+        return Exact::Uncovered;
     };
     let count: usize = faces.iter().map(|f| f.verts.len()).sum();
     let inner = faces.iter().flat_map(|f| f.verts.iter().copied()).sum::<Vector>() / count as Real;
@@ -98,7 +102,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             moment += (inner + p[0] + p[i] + p[i + 1]) * (0.25 * v);
             a += 0.5 * (p[i] - p[0]).cross(p[i + 1] - p[0]).length();
         }
-        let body = f.body?;
+        let Some(body) = f.body else { return Exact::Uncovered };
         area_vec[body] += f.normal * a;
         area[body] += a;
         for v in p {
@@ -107,16 +111,16 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         }
     }
     if volume.is_nan() {
-        return None;
+        return Exact::Uncovered;
     }
     if volume <= 0.0 {
-        return Some(None);
+        return Exact::Apart;
     }
     let centroid = moment / volume;
     // Blended as the sub-cell integration blends its facets.
     let normal = blended_normal(area_vec, area).normalize_or_zero();
     if normal == Vector::ZERO || !normal.is_finite() {
-        return None;
+        return Exact::Uncovered;
     }
     let exit = |d: Vector| {
         planes
@@ -127,14 +131,17 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             .max(0.0)
     };
     let indentation = exit(normal) + exit(-normal);
-    indentation.is_finite().then_some(Some(OverlapGeometry {
+    if !indentation.is_finite() {
+        return Exact::Uncovered;
+    }
+    Exact::Overlap(OverlapGeometry {
         volume,
         contact_point: centroid,
         normal,
         indentation,
         surface_area: area[0] + area[1],
         corrected_box: Aabb::new(lo, hi),
-    }))
+    })
 }
 
 /// The six faces of the box `lo`–`hi`.
