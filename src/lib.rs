@@ -142,8 +142,8 @@ pub use force::{
     contact_force, contact_force_with_history, normal_force, BodyKinematics, ContactForce,
 };
 pub use material::{
-    damping_from_restitution, effective_modulus, hertz_contact_time, Friction, Material,
-    PairParameters, StiffnessFactor,
+    damping_from_restitution, effective_modulus, hertz_contact_time, hertz_max_indentation,
+    Friction, Material, PairParameters, StiffnessFactor,
 };
 pub use overlap::{compute_overlap, IntegrationMode, OverlapGeometry, OverlapSettings};
 pub use shape::{ConvexShape, Sdf};

@@ -156,6 +156,13 @@ pub fn hertz_contact_time(m_star: Real, r_star: Real, e_star: Real, v0: Real) ->
     2.87 * (m_star * m_star / (r_star * e_star * e_star * v0)).powf(0.2)
 }
 
+/// Deepest indentation (m) of an elastic Hertz impact, `d_max = (15 m* v0² / (16 E* √R*))^(2/5)`,
+/// for the same quantities as [`hertz_contact_time`]: what the drop-in compares with a body's
+/// size before it lets an impact happen (`Error::ContactTooSoft`).
+pub fn hertz_max_indentation(m_star: Real, r_star: Real, e_star: Real, v0: Real) -> Real {
+    (15.0 * m_star * v0 * v0 / (16.0 * e_star * r_star.sqrt())).powf(0.4)
+}
+
 /// Damping constant `c` (s/m) that gives restitution `e` for an impact at normal speed `v0`
 /// under any force `f(x) (1 + c x')` (Carvalho & Martins 2019).
 ///

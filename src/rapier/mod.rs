@@ -54,7 +54,8 @@ use crate::contact::{BodyState, ContactModel, ContactState};
 use crate::error::{check_positive, Error, Result};
 use crate::force::BodyKinematics;
 use crate::material::{
-    effective_modulus, hertz_contact_time, Friction, Material, PairParameters, StiffnessFactor,
+    effective_modulus, hertz_contact_time, hertz_max_indentation, Friction, Material,
+    PairParameters, StiffnessFactor,
 };
 use crate::math::{Pose, Real, Vector};
 use crate::overlap::OverlapSettings;

@@ -68,8 +68,7 @@ impl DiscreteContacts {
             } else {
                 ((ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rims).max(1e-3)
             };
-            let depth =
-                (15.0 * m_star * v_normal * v_normal / (16.0 * e_star * r_star.sqrt())).powf(0.4);
+            let depth = hertz_max_indentation(m_star, r_star, e_star, v_normal);
             let limit = self.indentation_limit * ha.half_size.min(hb.half_size);
             if depth > limit {
                 return Err(Error::ContactTooSoft {
