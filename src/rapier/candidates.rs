@@ -96,7 +96,7 @@ impl DiscreteContacts {
             (Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count));
         for c in &n.bounded {
             let h = &self.handled[c];
-            let (pose, k, _, mass) = Self::kinematics(world, *c);
+            let ColliderMotion { pose, kinematics: k, mass, .. } = Self::kinematics(world, *c);
             spheres.push(Sphere { centre: pose.transform_point(h.centre), radius: h.radius });
             reaches.push(reach(h, &k));
             mobile.push(mass.is_finite());
@@ -145,11 +145,12 @@ impl DiscreteContacts {
             self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
         planes.sort_by_key(|c| c.into_raw_parts());
         for &p in &planes {
-            let (pose, kp, _, _) = Self::kinematics(world, p);
+            let ColliderMotion { pose, kinematics: kp, .. } = Self::kinematics(world, p);
             let ConvexShape::HalfSpace { normal } = self.handled[&p].shape else { continue };
             let (n, on_plane) = (pose.rotation * normal, pose.translation);
             for (&c, h) in self.handled.iter().filter(|(_, h)| h.radius.is_finite()) {
-                let (pose_c, kc, _, _) = Self::kinematics(world, c);
+                let ColliderMotion { pose: pose_c, kinematics: kc, .. } =
+                    Self::kinematics(world, c);
                 let gap = n.dot(pose_c.transform_point(h.centre) - on_plane) - h.radius;
                 if gap <= (speed(h, &kc) + speed(&self.handled[&p], &kp)) * dt
                     && !known.contains(&(p, c))

@@ -36,10 +36,9 @@ impl DiscreteContacts {
         }
     }
 
-    pub(super) fn kinematics(
-        world: &PhysicsWorld,
-        c: ColliderHandle,
-    ) -> (Pose, BodyKinematics, Option<RigidBodyHandle>, Real) {
+    /// Collider `c`'s pose and its body's motion (at rest, of infinite mass, for a collider
+    /// without a body).
+    pub(super) fn kinematics(world: &PhysicsWorld, c: ColliderHandle) -> ColliderMotion {
         let co = &world.colliders[c];
         let pose = *co.position();
         match co.parent().and_then(|h| world.bodies.get(h).map(|rb| (h, rb))) {
@@ -50,9 +49,14 @@ impl DiscreteContacts {
                     angvel: rb.angvel(),
                 };
                 let mass = if rb.is_dynamic() { rb.mass() } else { Real::INFINITY };
-                (pose, k, Some(h), mass)
+                ColliderMotion { pose, kinematics: k, body: Some(h), mass }
             }
-            None => (pose, BodyKinematics::at_rest(pose.translation), None, Real::INFINITY),
+            None => ColliderMotion {
+                pose,
+                kinematics: BodyKinematics::at_rest(pose.translation),
+                body: None,
+                mass: Real::INFINITY,
+            },
         }
     }
 
@@ -106,8 +110,9 @@ impl DiscreteContacts {
         let w = &*world;
         let evaluate = |&(ca, cb, shift): &Candidate| -> Result<Checked> {
             let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
-            let (pa, ka, ba, _) = Self::kinematics(w, ca);
-            let (mut pb, mut kb, bb, _) = Self::kinematics(w, cb);
+            let ColliderMotion { pose: pa, kinematics: ka, body: ba, .. } = Self::kinematics(w, ca);
+            let ColliderMotion { pose: mut pb, kinematics: mut kb, body: bb, .. } =
+                Self::kinematics(w, cb);
             // B's nearest image (periodic boxes); a rigid shift changes no force or torque.
             pb.translation += shift;
             kb.center_of_mass += shift;

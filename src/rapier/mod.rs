@@ -112,6 +112,15 @@ struct Handled {
     half_size: Real,
 }
 
+/// A collider's pose and its body's motion as a contact sees them: the body's kinematics, its
+/// handle, and its mass (infinite for a body that does not move, or no body at all).
+struct ColliderMotion {
+    pose: Pose,
+    kinematics: BodyKinematics,
+    body: Option<RigidBodyHandle>,
+    mass: Real,
+}
+
 /// A candidate pair and the shift that moves the second collider to its image nearest the
 /// first (zero without periodic axes).
 type Candidate = (ColliderHandle, ColliderHandle, Vector);

@@ -32,8 +32,10 @@ impl DiscreteContacts {
             .max(STABLE_SUBSTEPS_PER_HALF_PERIOD);
         for (ca, cb) in self.lookahead_pairs(world, dt)? {
             let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
-            let (pa, ka, _, ma) = Self::kinematics(world, ca);
-            let (pb, kb, _, mb) = Self::kinematics(world, cb);
+            let ColliderMotion { pose: pa, kinematics: ka, mass: ma, .. } =
+                Self::kinematics(world, ca);
+            let ColliderMotion { pose: pb, kinematics: kb, mass: mb, .. } =
+                Self::kinematics(world, cb);
             let m_star = 1.0 / (1.0 / ma + 1.0 / mb);
             // Two immovable bodies, or a mass rapier has not computed yet (before its first step).
             if !(m_star.is_finite() && m_star > 0.0) {
