@@ -115,29 +115,35 @@ const EMPTY: Slot = Slot { t: 0.0, other: Real::NAN, stamp: 0 };
 /// Per body, per node, per forward edge.
 type Crossings = [Vec<[Slot; 7]>; 2];
 
-/// Crossings of A's (0) and B's (1) surface on the forward edges of every node. A slot holds a
-/// crossing of this evaluation only when its stamp is this evaluation's: the buffers are kept
-/// between evaluations and never cleared (a fill of the whole cache cost more than the
-/// crossings of a small overlap).
+/// Per body, per node: the distance gradient there and the evaluation it was computed in.
+type NodeGradients = [Vec<(u32, Vector)>; 2];
+
+/// Crossings of A's (0) and B's (1) surface on the forward edges of every node, and the
+/// bodies' gradients at the nodes (a node is a corner of up to eight cells clipped by tangent
+/// planes). A slot holds a value of this evaluation only when its stamp is this evaluation's:
+/// the buffers are kept between evaluations and never cleared (a fill of the whole cache cost
+/// more than the crossings of a small overlap).
 struct EdgeCache {
     t: Crossings,
+    gradients: NodeGradients,
     stamp: u32,
     m: usize,
 }
 
 thread_local! {
     /// Each thread's edge-cache buffers and the last stamp used, kept between evaluations.
-    static SPARE: std::cell::RefCell<(Crossings, u32)> = const { std::cell::RefCell::new(([Vec::new(), Vec::new()], 0)) };
+    static SPARE: std::cell::RefCell<(Crossings, NodeGradients, u32)> =
+        const { std::cell::RefCell::new(([Vec::new(), Vec::new()], [Vec::new(), Vec::new()], 0)) };
 }
 
 impl EdgeCache {
     fn new(nodes: usize, m: usize) -> Self {
-        let (mut t, mut stamp) = SPARE.with(|s| std::mem::take(&mut *s.borrow_mut()));
+        let (mut t, mut gradients, mut stamp) =
+            SPARE.with(|s| std::mem::take(&mut *s.borrow_mut()));
         if stamp == u32::MAX {
             // Stamps wrapped: forget every slot once.
-            for v in &mut t {
-                v.clear();
-            }
+            t.iter_mut().for_each(Vec::clear);
+            gradients.iter_mut().for_each(Vec::clear);
             stamp = 0;
         }
         stamp += 1;
@@ -146,7 +152,23 @@ impl EdgeCache {
                 v.resize(nodes, [EMPTY; 7]);
             }
         }
-        Self { t, stamp, m }
+        for v in &mut gradients {
+            if v.len() < nodes {
+                v.resize(nodes, (0, Vector::ZERO));
+            }
+        }
+        Self { t, gradients, stamp, m }
+    }
+
+    /// Body `s`'s gradient at node `n`: computed by `gradient` the first time this evaluation
+    /// asks for it, kept after.
+    #[inline]
+    fn node_gradient(&mut self, s: usize, n: usize, gradient: impl FnOnce() -> Vector) -> Vector {
+        let slot = &mut self.gradients[s][n];
+        if slot.0 != self.stamp {
+            *slot = (self.stamp, gradient());
+        }
+        slot.1
     }
 
     /// The slot of node `n`'s forward edge `k` of body `s`, if computed in this evaluation.
@@ -179,9 +201,9 @@ impl EdgeCache {
 
 impl Drop for EdgeCache {
     fn drop(&mut self) {
-        let t = std::mem::take(&mut self.t);
+        let (t, gradients) = (std::mem::take(&mut self.t), std::mem::take(&mut self.gradients));
         let stamp = self.stamp;
-        SPARE.with(|s| *s.borrow_mut() = (t, stamp));
+        SPARE.with(|s| *s.borrow_mut() = (t, gradients, stamp));
     }
 }
 
@@ -201,10 +223,6 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     edges: [bool; 2],
     /// Buffers of the tangent-plane clip, reused from cell to cell.
     scratch: crease::Scratch,
-    /// Each grid node's gradients, A's and B's, once a tangent-plane cell has asked for them
-    /// (a node is a corner of up to eight such cells); NaN until then. Empty when neither body
-    /// has edges (no cell is clipped by tangent planes at its corners).
-    node_gradients: Vec<[Vector; 2]>,
 }
 
 /// Volume, moment, normal and bounds summed over the clipped pieces.
@@ -511,11 +529,6 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         sums,
         edges: [pair.a.has_edges(), pair.b.has_edges()],
         scratch: crease::Scratch::new(),
-        node_gradients: if pair.a.has_edges() || pair.b.has_edges() {
-            vec![[Vector::NAN; 2]; values.len()]
-        } else {
-            Vec::new()
-        },
     };
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
@@ -698,11 +711,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 let g = if k >= 9 {
                     face_gradients[s][k - 9]
                 } else if (1..9).contains(&k) && c[k - 1].node() != NOT_A_NODE {
-                    let node = c[k - 1].node() as usize;
-                    if self.node_gradients[node][s].is_nan() {
-                        self.node_gradients[node][s] = gradient(x);
-                    }
-                    self.node_gradients[node][s]
+                    self.cache.node_gradient(s, c[k - 1].node() as usize, || gradient(x))
                 } else {
                     gradient(x)
                 };
