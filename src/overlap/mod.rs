@@ -558,48 +558,37 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         let grow = (p.maxs - p.mins).max_element() * 0.25;
         intersect(&Aabb::new(p.mins - Vector::splat(grow), p.maxs + Vector::splat(grow)), &rough)
     });
-    let followed = match (settings.mode, previous_box) {
-        (IntegrationMode::Subcell, Some(p)) if reused.is_some() => {
-            follow(&pair, p, &rough, settings.n_c)
-        }
-        _ => None,
-    };
     let search = |seed: &Aabb| {
         find_box(&pair, seed, &rough, settings.n_c, settings.mode)
             .and_then(|corrected| overlap_in_box(&pair, &corrected, &rough, settings))
     };
-    if settings.mode == IntegrationMode::Subcell {
-        // A persistent contact follows its last box; a first touch (or a contact that moved
-        // by more than a cell) is integrated on the cutting-plane box that holds all of the
-        // overlap (`bound`), which also proves the bodies apart. The rays' search from the
-        // rough box decides only what that grid finds nothing in: an overlap far thinner than
-        // the box is tight, such as a touch 1e-18 m deep.
-        if followed.is_some() {
-            return Ok(followed.map(to_world));
-        }
-        let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else {
-            return Ok(None);
-        };
-        return Ok(first_touch(&pair, &bounds, &rough, settings)
-            .or_else(|| search(&rough))
-            .map(to_world));
-    }
-    // Counting: a persistent contact searches from its last box (grown when the overlap
-    // reaches its faces). A first touch, or a contact its box lost, searches the cutting-plane
-    // box, which proves the bodies apart when it empties: from the rough box, the axis rays
-    // stepped over thin overlaps between them and reported overlapping bodies apart. When the
-    // rays find nothing there, the nodes are counted on the cutting-plane box itself, and a
-    // search from the rough box decides what that grid finds nothing in (a touch 1e-18 m deep).
-    if let Some(found) = reused.as_ref().and_then(&search) {
+    // A persistent contact starts from its last box: sub-cell mode integrates it padded by a
+    // cell (`follow`), counting searches from it (growing it when the overlap reaches its
+    // faces).
+    let persistent = reused.as_ref().and_then(|r| match settings.mode {
+        IntegrationMode::Subcell => follow(&pair, previous_box?, &rough, settings.n_c),
+        IntegrationMode::Count => search(r),
+    });
+    if let Some(found) = persistent {
         return Ok(Some(to_world(found)));
     }
+    // A first touch, or a contact its box lost, starts from the cutting-plane box (`bound`),
+    // which holds all of the overlap and proves the bodies apart when it empties. Sub-cell mode
+    // integrates on it; counting searches it (from the rough box, the axis rays stepped over
+    // thin overlaps and reported overlapping bodies apart) and, when the rays find nothing
+    // there, counts the nodes on the cutting-plane box itself. A search from the rough box
+    // decides only what those grids find nothing in: an overlap far thinner than the box is
+    // tight, such as a touch 1e-18 m deep.
     let Some(bounds) = bound::overlap_box(&pair, &rough, reused.as_ref(), settings.n_c) else {
         return Ok(None);
     };
-    let found = find_box(&pair, &bounds, &bounds, settings.n_c, settings.mode)
-        .and_then(|corrected| overlap_in_box(&pair, &corrected, &bounds, settings))
-        .or_else(|| overlap_in_box(&pair, &bounds, &bounds, settings))
-        .or_else(|| search(&rough));
+    let found = match settings.mode {
+        IntegrationMode::Subcell => first_touch(&pair, &bounds, &rough, settings),
+        IntegrationMode::Count => find_box(&pair, &bounds, &bounds, settings.n_c, settings.mode)
+            .and_then(|corrected| overlap_in_box(&pair, &corrected, &bounds, settings))
+            .or_else(|| overlap_in_box(&pair, &bounds, &bounds, settings)),
+    }
+    .or_else(|| search(&rough));
     Ok(found.map(to_world))
 }
 
