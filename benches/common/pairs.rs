@@ -3,22 +3,11 @@
 //! twelve points, as in the `drop_in` scene) and a capsule across a cylinder, each overlapping.
 
 use discrete_contact::prelude::*;
+use discrete_contact_validation::drop_in::{rock_points, xorshift};
 
-/// A rock of radius ~`r`: the hull of twelve points at 0.85–1.15 `r` from its centre, from a
-/// fixed xorshift sequence (`seed`).
-fn rock(r: Real, mut seed: u64) -> ConvexShape {
-    let mut random = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as Real / (1u64 << 53) as Real
-    };
-    let points: Vec<Vector> = (0..12)
-        .map(|_| {
-            let p = Vector::new(random() - 0.5, random() - 0.5, random() - 0.5);
-            p.normalize_or(Vector::X) * r * (0.85 + 0.3 * random())
-        })
-        .collect();
+/// A rock of radius ~`r` as in the `drop_in` scene, from the xorshift sequence of `seed`.
+fn rock(r: Real, seed: u64) -> ConvexShape {
+    let points = rock_points(r, &mut xorshift(seed));
     ConvexShape::convex_hull(&points).expect("twelve points in general position")
 }
 

@@ -64,6 +64,28 @@ pub struct BinScene {
     pub half_width: Real,
 }
 
+/// A uniform sequence on [0, 1) from xorshift64 started at `seed`: portable and fixed, so a
+/// scene is the same on every machine.
+pub fn xorshift(mut seed: u64) -> impl FnMut() -> Real {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as Real / (1u64 << 53) as Real
+    }
+}
+
+/// The scene's rock about its centre: twelve points in directions drawn from `random`, each at
+/// 0.85–1.15 `r` (their convex hull is the rock).
+pub fn rock_points(r: Real, random: &mut impl FnMut() -> Real) -> Vec<Vector> {
+    (0..12)
+        .map(|_| {
+            let p = Vector::new(random() - 0.5, random() - 0.5, random() - 0.5);
+            p.normalize_or(Vector::X) * r * (0.85 + 0.3 * random())
+        })
+        .collect()
+}
+
 /// A bin with `n` falling bodies, columns of six by six per layer, shapes cycling through
 /// sphere, cylinder, cube and polyhedron, each slightly turned (deterministic).
 pub fn bin_scene(n: usize) -> BinScene {
@@ -109,13 +131,7 @@ pub fn bin_scene(n: usize) -> BinScene {
 
     // The falling bodies.
     let mut bodies = Vec::with_capacity(n);
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut random = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as Real / (1u64 << 53) as Real
-    };
+    let mut random = xorshift(0x2545_f491_4f6c_dd1d);
     for i in 0..n {
         let (layer, k) = (i / (per_row * per_row), i % (per_row * per_row));
         let x = -half_width + r + 0.5 * spacing + (k % per_row) as Real * spacing;
@@ -136,13 +152,7 @@ pub fn bin_scene(n: usize) -> BinScene {
             1 => ColliderBuilder::cylinder(0.8 * r, 0.9 * r),
             2 => ColliderBuilder::cuboid(0.8 * r, 0.8 * r, 0.8 * r),
             _ => {
-                // A rock: the hull of twelve points near a sphere.
-                let points: Vec<Vector> = (0..12)
-                    .map(|_| {
-                        let p = Vector::new(random() - 0.5, random() - 0.5, random() - 0.5);
-                        p.normalize_or(Vector::X) * r * (0.85 + 0.3 * random())
-                    })
-                    .collect();
+                let points = rock_points(r, &mut random);
                 ColliderBuilder::convex_hull(&points).unwrap_or_else(|| ColliderBuilder::ball(r))
             }
         };
