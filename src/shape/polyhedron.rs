@@ -22,14 +22,14 @@ pub struct PolyhedronSdf {
     pub(super) bounds: Aabb,
 }
 
-/// An edge of a face, `a → a + e` in the face's counter-clockwise order, with the face's side
+/// An edge of a face, `a → b` in the face's counter-clockwise order, with the face's side
 /// plane through it: `o·p <= c` on the face's side, `o` the edge direction turned outward in
 /// the face's plane. A point projects into a face when it lies on the inner side of every side
 /// plane, which needs no projection: the side planes contain the face's normal.
 #[derive(Clone, Copy, Debug)]
 struct FaceEdge {
     a: Vector,
-    e: Vector,
+    b: Vector,
     o: Vector,
     c: Real,
 }
@@ -136,9 +136,9 @@ impl PolyhedronSdf {
             .flat_map(|(&(n, _), verts)| {
                 let m = verts.len();
                 (0..m).map(move |i| {
-                    let (a, e) = (verts[i], verts[(i + 1) % m] - verts[i]);
-                    let o = e.cross(n);
-                    FaceEdge { a, e, o, c: o.dot(a) }
+                    let (a, b) = (verts[i], verts[(i + 1) % m]);
+                    let o = (b - a).cross(n);
+                    FaceEdge { a, b, o, c: o.dot(a) }
                 })
             })
             .collect();
@@ -186,7 +186,7 @@ impl PolyhedronSdf {
             let mut inside = true;
             for e in face_edges(k).iter().filter(|e| beyond(e)) {
                 inside = false;
-                let q = closest_on_segment(p, e.a, e.a + e.e);
+                let q = closest_on_segment(p, e.a, e.b);
                 let d = (p - q).length();
                 if d < out.0 {
                     // Within round-off of an edge, `p − q` has no direction: the face's normal
