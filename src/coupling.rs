@@ -27,10 +27,10 @@
 //! around each surface) only meet when the gap is below ε, and a node must lie where they
 //! meet; to catch every pair that can touch within a step (gap up to twice the contact
 //! enlargement plus the step's travel, ~0.6 Δx in the settling runs) each body would have to
-//! be mapped out to ~1.2 Δx beyond its surface — for a 9-node sphere 70 % more mapped nodes,
-//! and mapping is already ~30 % of a peer-case step. Candidates therefore come from rapier's
-//! broad phase or, in a periodic box, the bounding-sphere cell list of
-//! [`DiscreteContacts::with_periodic`], which costs under 1 % of a step.
+//! be mapped out to ~1.2 Δx beyond its surface — for a small sphere most of its mapped nodes
+//! again, in a mapping that is already a large part of a step. Candidates therefore come from
+//! rapier's broad phase or, in a periodic box, the bounding-sphere cell list of
+//! [`DiscreteContacts::with_periodic`], which is cheap beside the step.
 //!
 //! ```
 //! use discrete_contact::coupling::{Fluid, FluidSettings};
@@ -127,7 +127,7 @@ struct Coupled {
 }
 
 /// A body as one mapping sees it.
-struct Placed<'a> {
+struct MappedBody<'a> {
     id: usize,
     shape: &'a ConvexShape,
     inverse: crate::math::Pose,
@@ -360,7 +360,7 @@ impl Fluid {
                 by_slab[k.rem_euclid(dims[2] as i64) as usize].push((placed.len(), k));
             }
             let base = [0, 1, 2].map(|d| ranges[d].0.div_euclid(dims[d] as i64) * dims[d] as i64);
-            placed.push(Placed {
+            placed.push(MappedBody {
                 id,
                 shape: &b.shape,
                 inverse: pose.inverse(),
@@ -418,7 +418,7 @@ impl Fluid {
                 // at most the lattice): no integer division per node.
                 let (lo, x_lo) = (b.ranges[0].0, wrap(b.ranges[0].0, 0));
                 // Along a row the body-frame position steps by the rotated Δx: the pose's
-                // transform once per row (per node it was ~15 % of the mapping at φ = 30 %).
+                // transform once per row, not per node.
                 let step = b.inverse.rotation * Vector::new(dx, 0.0, 0.0);
                 for j in b.ranges[1].0..=b.ranges[1].1 {
                     let y = wrap(j, 1);
@@ -485,9 +485,8 @@ impl Fluid {
     /// (with either force measure) — so the total momentum of fluid and bodies stays constant
     /// (tested: a sphere in a periodic box settles at a constant speed, as the Stokes cubic
     /// array). With the momentum exchange, fast bodies still leak a little: the nodes a moving
-    /// body newly covers are turned to its velocity without the body paying for it (−1.4 % of
-    /// the net weight at Re ≈ 24, lattice speed 0.07, as the `hindered_settling` example's
-    /// momentum imbalance reports).
+    /// body newly covers are turned to its velocity without the body paying for it (the
+    /// `hindered_settling` example reports this momentum imbalance).
     /// Call it after coupling the bodies; returns `a` (m/s²).
     pub fn balance_weight(&mut self, world: &PhysicsWorld) -> Result<Vector> {
         let rho = self.units.density();

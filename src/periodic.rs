@@ -141,9 +141,9 @@ pub struct Sphere {
 /// Pairs `(i, j, shift)`, `i < j`, of spheres that overlap — through periodic faces when a box
 /// is given, `shift` then moving sphere `j` to its image nearest to `i` (zero without a box).
 ///
-/// A uniform cell list of cell size the largest diameter: `O(n)` for bodies of similar size.
-/// The pairs come sorted by `(i, j)`, whatever the hash order, so callers that sum forces in
-/// this order get the same result on every run.
+/// A [`CellGrid`] of cell size the largest diameter: `O(n)` for bodies of similar size. The
+/// pairs come sorted by `(i, j)`, whatever the hash order, so callers that sum forces in this
+/// order get the same result on every run.
 pub fn overlapping_spheres(
     spheres: &[Sphere],
     periodic: Option<&PeriodicBox>,
@@ -156,49 +156,18 @@ pub fn overlapping_spheres(
     else {
         return Vec::new();
     };
-    // Along a periodic axis with fewer than 3 cells, every body is every body's neighbour
-    // along it: one cell there, so no pair is visited twice.
-    let cells: [i64; 3] = std::array::from_fn(|d| match periodic {
-        Some(b) if b.periodic[d] => {
-            let n = (b.lengths()[d] / h).floor() as i64;
-            if n >= 3 {
-                n
-            } else {
-                1
-            }
-        }
-        _ => 0,
-    });
-    let origin = periodic.map_or(Vector::ZERO, |b| b.min);
-    let key = |p: Vector, offset: [i64; 3]| -> [i64; 3] {
-        std::array::from_fn(|d| {
-            if cells[d] > 0 {
-                let l = periodic.map_or(1.0, |b| b.lengths()[d]);
-                let i =
-                    (((p[d] - origin[d]) / l).rem_euclid(1.0) * cells[d] as Real).floor() as i64;
-                (i.min(cells[d] - 1) + offset[d]).rem_euclid(cells[d])
-            } else {
-                ((p[d] - origin[d]) / h).floor() as i64 + offset[d]
-            }
-        })
-    };
-    let buckets = Buckets::new(spheres.len(), cells, spheres.iter().map(|s| key(s.centre, [0; 3])));
-    let range = |d: usize| if cells[d] == 1 { 0..=0 } else { -1..=1 };
+    let mut grid = CellGrid::new(h, periodic);
+    for (i, s) in spheres.iter().enumerate() {
+        grid.insert(i, s.centre);
+    }
     let mut pairs = Vec::new();
     for (i, a) in spheres.iter().enumerate() {
-        for oz in range(2) {
-            for oy in range(1) {
-                for ox in range(0) {
-                    let list = buckets.get(key(a.centre, [ox, oy, oz]));
-                    for &j in list.iter().filter(|&&j| j > i) {
-                        let b = &spheres[j];
-                        let shift = periodic
-                            .map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
-                        if (b.centre + shift - a.centre).length() <= a.radius + b.radius {
-                            pairs.push((i, j, shift));
-                        }
-                    }
-                }
+        for j in grid.near(a.centre).filter(|&j| j > i) {
+            let b = &spheres[j];
+            let shift =
+                periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
+            if (b.centre + shift - a.centre).length() <= a.radius + b.radius {
+                pairs.push((i, j, shift));
             }
         }
     }
@@ -206,55 +175,119 @@ pub fn overlapping_spheres(
     pairs
 }
 
-/// The cell list's buckets: in a box periodic along every axis a dense array of cells, filled
-/// by counting sort (no hashing; measured the larger part of a dense suspension's pair search
-/// with hashing); otherwise a hash map of the occupied cells.
+/// A uniform grid of cubic cells over space, periodic where a box is: items are filed under
+/// the cell of a point, and [`near`](Self::near) lists the items of the cells around a point,
+/// each cell once. With cells at least as wide as the largest reach asked for, every item
+/// within that reach of the point (through the periodic faces) is among them.
+///
+/// The one cell list of the crate: the pair search ([`overlapping_spheres`]) fills it at once,
+/// random sequential placement fills it one item at a time.
+///
+/// ```
+/// use discrete_contact::math::Vector;
+/// use discrete_contact::periodic::{CellGrid, PeriodicBox};
+/// let b = PeriodicBox::new(Vector::ZERO, Vector::splat(1.0), [true; 3])?;
+/// let mut grid = CellGrid::new(0.2, Some(&b));
+/// grid.insert(0, Vector::new(0.05, 0.5, 0.5));
+/// grid.insert(1, Vector::new(0.5, 0.5, 0.5));
+/// // Item 0 is 0.1 away from x = 0.95 through the face x = 1; item 1 is far.
+/// assert_eq!(grid.near(Vector::new(0.95, 0.5, 0.5)).collect::<Vec<_>>(), vec![0]);
+/// # Ok::<(), discrete_contact::Error>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct CellGrid {
+    /// Cell width (m) along an open axis.
+    width: Real,
+    /// Cells along each axis: the box's length split into cells of at least `width` along a
+    /// periodic axis (one cell where fewer than three fit, so no cell is visited twice), `0`
+    /// along an open axis (unbounded).
+    cells: [i64; 3],
+    origin: Vector,
+    lengths: Vector,
+    /// Items per cell: a dense array in a box periodic along every axis (no hashing), else a
+    /// map of the occupied cells.
+    buckets: Buckets,
+}
+
+#[derive(Clone, Debug)]
 enum Buckets {
-    Dense { cells: [i64; 3], start: Vec<usize>, members: Vec<usize> },
+    Dense(Vec<Vec<usize>>),
     Sparse(HashMap<[i64; 3], Vec<usize>>),
 }
 
-impl Buckets {
+impl CellGrid {
+    /// An empty grid of cells at least `width` wide (m, positive and finite), periodic along
+    /// `periodic`'s periodic axes.
+    pub fn new(width: Real, periodic: Option<&PeriodicBox>) -> Self {
+        let lengths = periodic.map_or(Vector::ONE, |b| b.lengths());
+        let cells: [i64; 3] = std::array::from_fn(|d| match periodic {
+            Some(b) if b.periodic[d] => {
+                let n = (lengths[d] / width).floor() as i64;
+                if n >= 3 {
+                    n
+                } else {
+                    1
+                }
+            }
+            _ => 0,
+        });
+        let buckets = if cells.iter().all(|&c| c > 0) {
+            Buckets::Dense(vec![Vec::new(); (cells[0] * cells[1] * cells[2]) as usize])
+        } else {
+            Buckets::Sparse(HashMap::new())
+        };
+        Self { width, cells, origin: periodic.map_or(Vector::ZERO, |b| b.min), lengths, buckets }
+    }
+
+    /// Files `item` under the cell of `point` (m).
+    pub fn insert(&mut self, item: usize, point: Vector) {
+        let k = self.key(point, [0; 3]);
+        match &mut self.buckets {
+            Buckets::Dense(cells) => cells[Self::dense_index(self.cells, k)].push(item),
+            Buckets::Sparse(map) => map.entry(k).or_default().push(item),
+        }
+    }
+
+    /// The items filed in the cell of `point` and its neighbours (each cell once), cell by
+    /// cell in a fixed order and in insertion order within a cell.
+    pub fn near(&self, point: Vector) -> impl Iterator<Item = usize> + '_ {
+        let range = |d: usize| if self.cells[d] == 1 { 0..=0 } else { -1..=1 };
+        range(2)
+            .flat_map(move |z| range(1).flat_map(move |y| range(0).map(move |x| [x, y, z])))
+            .flat_map(move |offset| self.get(self.key(point, offset)).iter().copied())
+    }
+
+    /// Removes every item (keeping the cells).
+    pub fn clear(&mut self) {
+        match &mut self.buckets {
+            Buckets::Dense(cells) => cells.iter_mut().for_each(Vec::clear),
+            Buckets::Sparse(map) => map.clear(),
+        }
+    }
+
+    /// The cell `offset` cells away from `point`'s, wrapped along periodic axes.
+    fn key(&self, p: Vector, offset: [i64; 3]) -> [i64; 3] {
+        std::array::from_fn(|d| {
+            let n = self.cells[d];
+            if n > 0 {
+                let f = ((p[d] - self.origin[d]) / self.lengths[d]).rem_euclid(1.0);
+                (((f * n as Real).floor() as i64).min(n - 1) + offset[d]).rem_euclid(n)
+            } else {
+                ((p[d] - self.origin[d]) / self.width).floor() as i64 + offset[d]
+            }
+        })
+    }
+
     /// Index of cell `k` in the dense array of a `cells` grid.
     fn dense_index(cells: [i64; 3], k: [i64; 3]) -> usize {
         ((k[2] * cells[1] + k[1]) * cells[0] + k[0]) as usize
     }
 
-    /// Buckets of `n` items whose cells are `homes`, on a grid of `cells` (0 along an open axis).
-    fn new(n: usize, cells: [i64; 3], homes: impl Iterator<Item = [i64; 3]>) -> Self {
-        if cells.iter().all(|&c| c > 0) {
-            let homes: Vec<usize> = homes.map(|k| Self::dense_index(cells, k)).collect();
-            let mut start = vec![0usize; (cells[0] * cells[1] * cells[2]) as usize + 1];
-            for &c in &homes {
-                start[c + 1] += 1;
-            }
-            for c in 1..start.len() {
-                start[c] += start[c - 1];
-            }
-            let mut fill = start.clone();
-            let mut members = vec![0; n];
-            for (i, &c) in homes.iter().enumerate() {
-                members[fill[c]] = i;
-                fill[c] += 1;
-            }
-            Self::Dense { cells, start, members }
-        } else {
-            let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(n);
-            for (i, k) in homes.enumerate() {
-                grid.entry(k).or_default().push(i);
-            }
-            Self::Sparse(grid)
-        }
-    }
-
-    /// The items in cell `k`, in the order given.
+    /// The items in cell `k`.
     fn get(&self, k: [i64; 3]) -> &[usize] {
-        match self {
-            Self::Dense { cells, start, members } => {
-                let c = Self::dense_index(*cells, k);
-                &members[start[c]..start[c + 1]]
-            }
-            Self::Sparse(grid) => grid.get(&k).map_or(&[], |v| v.as_slice()),
+        match &self.buckets {
+            Buckets::Dense(cells) => &cells[Self::dense_index(self.cells, k)],
+            Buckets::Sparse(map) => map.get(&k).map_or(&[], |v| v.as_slice()),
         }
     }
 }

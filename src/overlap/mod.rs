@@ -94,8 +94,8 @@ impl OverlapSettings {
 
     /// Sphere–sphere and sphere–half-space pairs get their overlap in closed form (a lens of
     /// two spherical caps, one cap on a plane) instead of on the grid: what the grid integration
-    /// converges to as `N_c` grows, in a few operations instead of ~0.35 ms per sphere pair
-    /// (sub-cell, `N_c = 8`). Every other pair — and a configuration the closed form does not
+    /// converges to as `N_c` grows, in a few operations instead of a grid integration. Every
+    /// other pair — and a configuration the closed form does not
     /// cover, such as one sphere inside the other — is integrated on the grid as before. Off
     /// by default: the grid is the model, and the validations measure it.
     pub fn with_closed_form_spheres(mut self, on: bool) -> Self {
@@ -110,8 +110,8 @@ impl OverlapSettings {
 
     /// Pairs of bodies bounded by planes — cuboids, convex polyhedra, one of them possibly a
     /// half-space — get their overlap exactly: the intersection polyhedron of both bodies' face
-    /// half-spaces, its volume, centroid, facet area vectors and chord in closed form, in a
-    /// few microseconds instead of ~0.4–0.7 ms per cube pair on the grid (`N_c = 8`). It is
+    /// half-spaces, its volume, centroid, facet area vectors and chord in closed form, at a
+    /// fraction of a grid integration's cost. It is
     /// what the grid integration converges to as `N_c` grows, except that an enlargement moves
     /// the faces out (sharp edges) where the grid's `d <= ε` rounds edges and corners. Every
     /// other pair (a sphere, a cylinder, a rounded or custom body) is integrated on the grid as

@@ -11,10 +11,8 @@
 //! (the pairs come in index order, filtered by the same test), so a run resumed from a
 //! checkpoint, which starts with an empty list, gives the same pairs.
 //!
-//! In a settling suspension (D = 6 Δx, E = 50 kPa) the bodies move about 1 % of Δx per
-//! step: a skin of a fifth of the bounding radius lasts tens of steps, where the search used to
-//! run two to three times per step (see the `hindered_settling --perf-table` numbers in the
-//! README).
+//! A skin of a fifth of the smallest bounding radius lets a list last many steps in a settling
+//! suspension, whose bodies move a small fraction of a lattice spacing per step.
 
 use crate::error::Result;
 use crate::math::{Real, Vector};
