@@ -197,3 +197,65 @@ fn a_spinning_ball_stays_put_with_geometry_reuse() {
     assert!(sideways < 1e-8, "the spinning ball moved {sideways:e} m sideways");
     assert!(2 * full < all, "reuse skipped too few full evaluations ({full} of {all})");
 }
+
+/// Two overlapping balls in zero gravity, the second free to slide along x on a prismatic
+/// joint to the first (fixed): the contact pushes it away along x unless a rapier rule says
+/// the pair does not interact. `joint_contacts`: the joint's `contacts_enabled`; `flag`:
+/// whether the second ball's collider asks for the `filter_contact_pair` hook.
+fn pressed_pair(
+    joint_contacts: bool,
+    flag: bool,
+) -> (PhysicsWorld, DiscreteContacts, RigidBodyHandle) {
+    use discrete_contact::math::Vector;
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::ZERO;
+    world.integration_parameters.dt = 1e-4;
+    let a = world.insert_body(RigidBodyBuilder::fixed());
+    world.insert_collider(ColliderBuilder::ball(0.01), Some(a));
+    let b =
+        world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0195, 0.0, 0.0)));
+    let hooks = if flag { ActiveHooks::FILTER_CONTACT_PAIRS } else { ActiveHooks::empty() };
+    world.insert_collider(ColliderBuilder::ball(0.01).density(7800.0).active_hooks(hooks), Some(b));
+    let joint = PrismaticJointBuilder::new(Vector::X)
+        .local_anchor2(Vector::new(-0.0195, 0.0, 0.0))
+        .contacts_enabled(joint_contacts);
+    world.insert_impulse_joint(a, b, joint);
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9)
+            .unwrap();
+    contacts.handle_all(&mut world, Material::new(1e8, 0.3).unwrap()).unwrap();
+    (world, contacts, b)
+}
+
+/// A user hook that forbids every contact pair it is asked about.
+struct NoContacts;
+
+impl PhysicsHooks for NoContacts {
+    fn filter_contact_pair(&self, _: &PairFilterContext) -> Option<SolverFlags> {
+        None
+    }
+}
+
+/// Rapier's rules hold for handled pairs too: a joint with contacts disabled, and the user's
+/// `filter_contact_pair` hook on a collider that asked for it, leave the pair without a
+/// contact; the same pair pushes apart otherwise (and the hook is not asked for a collider
+/// that did not ask for it).
+#[test]
+fn joints_without_contacts_and_the_users_pair_filter_are_honoured() {
+    let run = |joint_contacts: bool, flag: bool| {
+        let (mut world, mut contacts, b) = pressed_pair(joint_contacts, flag);
+        for _ in 0..20 {
+            contacts.step_with_events(&mut world, &NoContacts, &()).unwrap();
+        }
+        (world.bodies[b].linvel().x, contacts.contact_count())
+    };
+    let (pushed, _) = run(true, false);
+    assert!(pushed > 1e-3, "the overlapping pair pushes apart: {pushed} m/s");
+    for (joint_contacts, flag) in [(false, false), (true, true)] {
+        let (v, live) = run(joint_contacts, flag);
+        assert!(
+            v.abs() < 1e-9 && live == 0,
+            "no contact ({joint_contacts}, {flag}): {v} m/s, {live} live"
+        );
+    }
+}

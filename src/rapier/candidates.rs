@@ -1,6 +1,7 @@
 //! The handled pairs that may touch: bounded pairs from the drop-in's own bounding-sphere
 //! neighbour list (through periodic faces), half-space pairs from rapier, and the look-ahead
-//! pairs the sub-step count considers; rapier's pair rules applied to each.
+//! pairs the sub-step count considers; rapier's pair rules applied to each, the user's
+//! `filter_contact_pair` hook among them.
 
 use super::*;
 
@@ -11,19 +12,32 @@ impl DiscreteContacts {
     /// bounded pairs: its margins follow `length_unit`, so a scene of centimetre bodies left at
     /// 1 m pairs each body with dozens (14 000 pairs for the 180 bodies of `drop_in`, against
     /// ~1 500 whose spheres meet).
-    pub(super) fn candidate_pairs(&self, world: &PhysicsWorld) -> Result<Vec<Candidate>> {
+    pub(super) fn candidate_pairs(
+        &self,
+        world: &PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+    ) -> Result<Vec<Candidate>> {
         let mut pairs: Vec<Candidate> =
-            self.rapier_half_space_pairs(world).map(|(a, b)| (a, b, Vector::ZERO)).collect();
+            self.rapier_half_space_pairs(world, hooks).map(|(a, b)| (a, b, Vector::ZERO)).collect();
         let margin = self.margin();
-        pairs.extend(self.sphere_pairs(world, |_, _| margin)?);
+        pairs.extend(self.sphere_pairs(world, hooks, |_, _| margin)?);
         Ok(pairs)
     }
 
     /// Whether rapier would let colliders `a` and `b` push each other: on different bodies,
     /// both enabled and solid, one of their active collision types admitting the pair of body
     /// types (a collider without a body counts as fixed), their collision and solver groups
-    /// admitting each other.
-    pub(super) fn interact(world: &PhysicsWorld, a: ColliderHandle, b: ColliderHandle) -> bool {
+    /// admitting each other, no joint between their bodies with contacts disabled (nor a
+    /// multibody without self-contacts), and — where the user had asked for the
+    /// `filter_contact_pair` hook on either collider when it was handed over — the user's
+    /// `hooks` returning solver flags that compute impulses.
+    pub(super) fn interact(
+        &self,
+        world: &PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+        a: ColliderHandle,
+        b: ColliderHandle,
+    ) -> bool {
         let (ca, cb) = (&world.colliders[a], &world.colliders[b]);
         let body_type = |co: &Collider| {
             co.parent()
@@ -40,6 +54,42 @@ impl DiscreteContacts {
                 || cb.active_collision_types().test(ta, tb))
             && ca.collision_groups().test(cb.collision_groups())
             && ca.solver_groups().test(cb.solver_groups())
+            && Self::joints_allow(world, ca.parent(), cb.parent())
+            && (!(self.handled[&a].user_filter || self.handled[&b].user_filter)
+                || hooks
+                    .filter_contact_pair(&PairFilterContext {
+                        bodies: &world.bodies,
+                        colliders: &world.colliders,
+                        collider1: a,
+                        collider2: b,
+                        rigid_body1: ca.parent(),
+                        rigid_body2: cb.parent(),
+                    })
+                    .is_some_and(|flags| flags.contains(SolverFlags::COMPUTE_RIGID_IMPULSES)))
+    }
+
+    /// Whether the joints between bodies `a` and `b` allow contacts between them, by rapier's
+    /// rules: no impulse joint between them with contacts disabled; in one multibody, its
+    /// self-contacts enabled and the joint between them (if any) with contacts enabled.
+    fn joints_allow(
+        world: &PhysicsWorld,
+        a: Option<RigidBodyHandle>,
+        b: Option<RigidBodyHandle>,
+    ) -> bool {
+        let (Some(a), Some(b)) = (a, b) else { return true };
+        if world.impulse_joints.joints_between(a, b).any(|(_, j)| !j.data.contacts_enabled) {
+            return false;
+        }
+        let mb = &world.multibody_joints;
+        match (mb.rigid_body_link(a), mb.rigid_body_link(b)) {
+            (Some(la), Some(lb)) if la.multibody == lb.multibody => {
+                mb.get_multibody(la.multibody).is_none_or(|m| m.self_contacts_enabled())
+                    && mb
+                        .joint_between(a, b)
+                        .is_none_or(|(_, _, link)| link.joint.data.contacts_enabled)
+            }
+            _ => true,
+        }
     }
 
     /// Rapier's broad-phase pairs of two handled colliders.
@@ -59,10 +109,12 @@ impl DiscreteContacts {
     pub(super) fn rapier_half_space_pairs<'w>(
         &'w self,
         world: &'w PhysicsWorld,
+        hooks: &'w dyn PhysicsHooks,
     ) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
         let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
-        self.rapier_pairs(world)
-            .filter(move |&(a, b)| (unbounded(&a) || unbounded(&b)) && Self::interact(world, a, b))
+        self.rapier_pairs(world).filter(move |&(a, b)| {
+            (unbounded(&a) || unbounded(&b)) && self.interact(world, hooks, a, b)
+        })
     }
 
     /// Half the contact enlargement of a pair: each bounding sphere grows by it.
@@ -76,6 +128,7 @@ impl DiscreteContacts {
     pub(super) fn sphere_pairs(
         &self,
         world: &PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
         reach: impl Fn(&Handled, &BodyKinematics) -> Real,
     ) -> Result<Vec<Candidate>> {
         let mut guard = self.neighbours.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
@@ -105,7 +158,7 @@ impl DiscreteContacts {
         Ok(found
             .into_iter()
             .filter(|&(i, j, _)| {
-                (mobile[i] || mobile[j]) && Self::interact(world, n.bounded[i], n.bounded[j])
+                (mobile[i] || mobile[j]) && self.interact(world, hooks, n.bounded[i], n.bounded[j])
             })
             .map(|(i, j, shift)| (n.bounded[i], n.bounded[j], shift))
             .collect())
@@ -122,6 +175,7 @@ impl DiscreteContacts {
     pub(super) fn lookahead_pairs(
         &self,
         world: &PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
         dt: Real,
     ) -> Result<Vec<(ColliderHandle, ColliderHandle)>> {
         let speed = |h: &Handled, k: &BodyKinematics| {
@@ -131,10 +185,10 @@ impl DiscreteContacts {
         let margin = self.margin();
         // Spheres grown by the margin and the distance they travel: the periodic candidates
         // and more.
-        let reached = self.sphere_pairs(world, |h, k| margin + speed(h, k) * dt)?;
+        let reached = self.sphere_pairs(world, hooks, |h, k| margin + speed(h, k) * dt)?;
         // Rapier's pairs with a half-space, then the list's.
         let mut pairs: Vec<(ColliderHandle, ColliderHandle)> =
-            self.rapier_half_space_pairs(world).collect();
+            self.rapier_half_space_pairs(world, hooks).collect();
         let known: std::collections::HashSet<
             (ColliderHandle, ColliderHandle),
             foldhash::fast::FixedState,
@@ -154,7 +208,7 @@ impl DiscreteContacts {
                 let gap = n.dot(pose_c.transform_point(h.centre) - on_plane) - h.radius;
                 if gap <= (speed(h, &kc) + speed(&self.handled[&p], &kp)) * dt
                     && !known.contains(&(p, c))
-                    && Self::interact(world, p, c)
+                    && self.interact(world, hooks, p, c)
                 {
                     pairs.push((p, c));
                 }

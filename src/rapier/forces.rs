@@ -102,9 +102,10 @@ impl DiscreteContacts {
     pub(super) fn apply_forces(
         &mut self,
         world: &mut PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
     ) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
-        let pairs = self.candidate_pairs(world)?;
+        let pairs = self.candidate_pairs(world, hooks)?;
         let eps = self.settings.enlargement();
         let this = &*self;
         let w = &*world;

@@ -110,6 +110,11 @@ struct Handled {
     radius: Real,
     /// Smallest half-extent of the bounds (m), infinite for a half-space.
     half_size: Real,
+    /// Whether the user had asked for the `filter_contact_pair` hook on the collider when it
+    /// was handed over: then the user's hook decides, with rapier's other rules, whether the
+    /// pair interacts.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    user_filter: bool,
 }
 
 /// A collider's pose and its body's motion as a contact sees them: the body's kinematics, its
@@ -357,8 +362,14 @@ impl DiscreteContacts {
         let b = shape.local_bounds();
         let half_size =
             if radius.is_finite() { (b.maxs - b.mins).min_element() * 0.5 } else { Real::INFINITY };
+        // Handed over again, the flag may be ours: keep what the user had asked for.
+        let user_filter = match self.handled.get(&collider) {
+            Some(h) => h.user_filter,
+            None => co.active_hooks().contains(ActiveHooks::FILTER_CONTACT_PAIRS),
+        };
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
-        self.handled.insert(collider, Handled { shape, material, centre, radius, half_size });
+        self.handled
+            .insert(collider, Handled { shape, material, centre, radius, half_size, user_filter });
         // A gap measured for another shape or size bounds nothing now, nor does a live
         // contact's last full geometry.
         self.gaps.clear();
@@ -409,7 +420,7 @@ impl DiscreteContacts {
         let dt = world.integration_parameters.dt;
         check_positive("integration_parameters.dt", dt)?;
         let builds = self.neighbour_builds();
-        let substeps = self.substeps(world, dt)?;
+        let substeps = self.substeps_with(world, hooks, dt)?;
         let saved =
             (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
         world.integration_parameters.dt = dt / substeps as Real;
@@ -417,7 +428,7 @@ impl DiscreteContacts {
         let mut stats = StepStats { substeps, ..Default::default() };
         let mut result = Ok(());
         for _ in 0..substeps {
-            let applied = match self.apply_forces(world, &mut stats) {
+            let applied = match self.apply_forces(world, hooks, &mut stats) {
                 Ok(a) => a,
                 Err(e) => {
                     result = Err(e);
@@ -455,6 +466,7 @@ mod tests {
             centre,
             radius,
             half_size: 0.01,
+            user_filter: false,
         };
         let from = Pose::from_parts(
             Vector::new(0.1, -0.2, 0.3),

@@ -23,14 +23,28 @@ impl DiscreteContacts {
     /// restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`] sub-steps at the default
     /// [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps per contact are set,
     /// never fewer than [`STABLE_SUBSTEPS_PER_HALF_PERIOD`].
+    ///
+    /// The user's `filter_contact_pair` hook is not consulted here (a pair it would exclude
+    /// still counts, so the advice never falls short); [`step_with_events`](Self::step_with_events)
+    /// consults it.
     pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
+        self.substeps_with(world, &(), dt)
+    }
+
+    /// [`substeps`](Self::substeps) with the user's hooks filtering the pairs.
+    pub(super) fn substeps_with(
+        &self,
+        world: &PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+        dt: Real,
+    ) -> Result<usize> {
         // (largest sub-step, the contact time that sets it, the pair)
         let mut worst: Option<(Real, Real, String)> = None;
         let spring = self.tangential == TangentialLaw::Spring && !self.friction.is_none();
         let per_half_period = (MIN_SUBSTEPS_PER_CONTACT * self.substeps_per_contact
             / SUBSTEPS_PER_CONTACT)
             .max(STABLE_SUBSTEPS_PER_HALF_PERIOD);
-        for (ca, cb) in self.lookahead_pairs(world, dt)? {
+        for (ca, cb) in self.lookahead_pairs(world, hooks, dt)? {
             let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
             let ColliderMotion { pose: pa, kinematics: ka, mass: ma, .. } =
                 Self::kinematics(world, ca);
