@@ -15,7 +15,10 @@
 //! `target/validation/checkpoints/`) and `--resume` (go on from those files after a stop, with
 //! bit-identical results), `--forcing-momentum` (the fluid's force on the sphere as the EDM
 //! forcing's momentum instead of Wen et al.'s link-wise momentum exchange; see
-//! `hlbm::ForceMethod`).
+//! `hlbm::ForceMethod`), `--enlargement 0.143` (contact enlargement, in Δx), `--lubrication`
+//! (the liquid film's force below the gap the lattice resolves, see
+//! `discrete_contact::lubrication`) with `--film-cutoff 0.667` (in Δx) and
+//! `--film-min-gap-um 1` (roughness, µm).
 //!
 //! Writes `target/validation/wet_rebound.csv` (`h0_mm,dx_mm,t_s,gap_mm`, with contact),
 //! `wet_rebound_no_contact.csv` (same columns), `wet_rebound_summary.csv` and
@@ -26,7 +29,7 @@ mod common;
 
 use std::time::Instant;
 
-use discrete_contact::coupling::ForceMethod;
+use discrete_contact::coupling::{ForceMethod, FILM_CUTOFF};
 use discrete_contact::math::Vector;
 use discrete_contact_validation::wet_rebound::{ReboundRun, Trajectory, WetRebound};
 use plotters::prelude::*;
@@ -63,6 +66,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c.dt = dt.parse::<f64>().expect("--dt-us: a number") * 1e-6;
         }
         c.contact = contact;
+        c.enlargement = args.number("--enlargement", 1.0 / 7.0) * c.dx;
+        if args.flag("--lubrication") {
+            c.film_cutoff = Some(args.number("--film-cutoff", FILM_CUTOFF) * c.dx);
+            c.film_min_gap = args.number("--film-min-gap-um", 1.0) * 1e-6;
+        }
         if args.flag("--forcing-momentum") {
             c.force_method = ForceMethod::Forcing;
         }

@@ -59,6 +59,7 @@ use rapier3d_f64::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
 use std::ops::Bound::{Excluded, Included};
 
 use crate::error::{check_positive, Error, Result};
+use crate::lubrication::Lubrication;
 use crate::math::{Real, Vector};
 use crate::periodic::PeriodicBox;
 use crate::rapier::{DiscreteContacts, StepStats};
@@ -107,7 +108,23 @@ impl FluidSettings {
     pub fn units(&self) -> &UnitConverter {
         &self.units
     }
+
+    /// The liquid film's force for gaps this lattice does not resolve, for
+    /// [`DiscreteContacts::with_lubrication`]: the fluid's dynamic viscosity, cut off at
+    /// [`FILM_CUTOFF`] `Δx`, the gap held at `min_gap` (m; `0 < min_gap <` the cut-off).
+    pub fn lubrication(&self, min_gap: Real) -> Result<Lubrication> {
+        Lubrication::new(
+            self.units.viscosity() * self.units.density(),
+            FILM_CUTOFF * self.units.dx(),
+            min_gap,
+        )
+    }
 }
+
+/// The gap, in lattice spacings, below which the lattice no longer resolves the film between
+/// two bodies and [`FluidSettings::lubrication`] takes over (the band of partly covered nodes
+/// around each body is about a spacing wide).
+pub const FILM_CUTOFF: Real = 2.0 / 3.0;
 
 /// A body the fluid sees.
 #[derive(Clone, Debug)]

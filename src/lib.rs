@@ -123,6 +123,7 @@ pub mod coupling;
 pub mod error;
 pub mod force;
 pub mod io;
+pub mod lubrication;
 pub mod material;
 pub mod overlap;
 pub mod periodic;

@@ -117,9 +117,17 @@ impl DiscreteContacts {
         })
     }
 
-    /// Half the contact enlargement of a pair: each bounding sphere grows by it.
+    /// Half the reach of a pair — the contact enlargement, or the lubrication cut-off if that
+    /// is larger: each bounding sphere grows by it.
     pub(super) fn margin(&self) -> Real {
-        0.5 * (self.settings.enlargement()[0] + self.settings.enlargement()[1])
+        0.5 * self.reach()
+    }
+
+    /// The gap (m) below which a pair acts: the contact enlargement, or the lubrication
+    /// cut-off if that is larger.
+    pub(super) fn reach(&self) -> Real {
+        let contact = self.settings.enlargement()[0] + self.settings.enlargement()[1];
+        self.lubrication.map_or(contact, |l| contact.max(l.cutoff()))
     }
 
     /// Pairs of handled bounded colliders, at least one on a dynamic body, whose bounding

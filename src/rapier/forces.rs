@@ -2,6 +2,7 @@
 //! torques summed in the candidates' order and put on the bodies; periodic wrapping.
 
 use super::*;
+use crate::lubrication::{film_radius, reduced_radius};
 
 impl DiscreteContacts {
     /// Moves every dynamic body of a handled bounded collider whose centre of mass left the
@@ -87,6 +88,45 @@ impl DiscreteContacts {
             + Self::tangential_compliance(world, cb, hb.radius))
     }
 
+    /// The liquid film's force on a pair whose colliders (`a`, `b`: pose, parry shape, body
+    /// motion, body) are closer than the lubrication cut-off; `None` without lubrication or
+    /// when they are farther apart.
+    fn film(
+        &self,
+        ha: &Handled,
+        hb: &Handled,
+        a: (&Pose, &dyn parry3d_f64::shape::Shape, &BodyKinematics, Option<RigidBodyHandle>),
+        b: (&Pose, &dyn parry3d_f64::shape::Shape, &BodyKinematics, Option<RigidBodyHandle>),
+    ) -> Option<Film> {
+        let lub = self.lubrication?;
+        // Parry's contact of a ball with a half-space is wrong with the ball first (its gap
+        // and first point), right with the half-space first: a half-space goes first.
+        let half_space = |h: &Handled| matches!(h.shape, ConvexShape::HalfSpace { .. });
+        let c = if half_space(hb) && !half_space(ha) {
+            let mut c = parry3d_f64::query::contact(b.0, b.1, a.0, a.1, lub.cutoff()).ok()??;
+            c.flip();
+            c
+        } else {
+            parry3d_f64::query::contact(a.0, a.1, b.0, b.1, lub.cutoff()).ok()??
+        };
+        let x = 0.5 * (c.point1 + c.point2);
+        let velocity = |k: &BodyKinematics| k.linvel + k.angvel.cross(x - k.center_of_mass);
+        // `normal1` points out of A, towards B: closing when A moves along it faster than B.
+        let closing = (velocity(a.2) - velocity(b.2)).dot(c.normal1);
+        let r_star = reduced_radius(film_radius(&ha.shape), film_radius(&hb.shape));
+        let f = lub.normal_force(c.dist, closing, r_star);
+        if f == 0.0 || !f.is_finite() {
+            return None;
+        }
+        let force_on_a = -f * c.normal1;
+        Some(Film {
+            bodies: (a.3, b.3),
+            force_on_a,
+            torque_on_a: (x - a.2.center_of_mass).cross(force_on_a),
+            torque_on_b: (x - b.2.center_of_mass).cross(-force_on_a),
+        })
+    }
+
     pub(super) fn params(&self, a: &Handled, b: &Handled) -> Result<PairParameters> {
         PairParameters::new(&a.material, &b.material, self.restitution)?
             .with_friction(self.friction)
@@ -122,23 +162,29 @@ impl DiscreteContacts {
             // an evaluation's cost, and a pair found apart stays apart without one while the
             // bodies have moved less than its margin.
             let mut state = this.states.get(&(ca, cb)).copied();
+            let (sa, sb) = (w.colliders[ca].shape(), w.colliders[cb].shape());
             if state.is_none() {
                 if let Some(gap) = this.gaps.get(&(ca, cb)) {
                     if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) < gap.margin {
-                        return Ok((None, Some(*gap)));
+                        return Ok((None, Some(*gap), None));
                     }
                 }
-                let margin = parry3d_f64::query::distance(
-                    &pa,
-                    w.colliders[ca].shape(),
-                    &pb,
-                    w.colliders[cb].shape(),
-                )
-                .map_or(Real::NAN, |d| d.distance - (eps[0] + eps[1]));
+                let distance = parry3d_f64::query::distance(&pa, sa, &pb, sb)
+                    .map_or(Real::NAN, |d| d.distance);
+                let margin = distance - this.reach();
                 if margin > 0.0 {
-                    return Ok((None, Some(Gap { margin, poses: (pa, pb) })));
+                    return Ok((None, Some(Gap { margin, poses: (pa, pb) }), None));
+                }
+                if distance - (eps[0] + eps[1]) > 0.0 {
+                    // Within the film's reach, not in contact.
+                    return Ok((
+                        None,
+                        None,
+                        this.film(ha, hb, (&pa, sa, &ka, ba), (&pb, sb, &kb, bb)),
+                    ));
                 }
             }
+            let film = this.film(ha, hb, (&pa, sa, &ka, ba), (&pb, sb, &kb, bb));
             // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
             // not computed yet (zero before its first step) leaves it unknown.
             let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
@@ -162,6 +208,7 @@ impl DiscreteContacts {
                     state,
                 }),
                 None,
+                film,
             ))
         };
         #[cfg(feature = "parallel")]
@@ -182,9 +229,17 @@ impl DiscreteContacts {
         };
         let mut gaps = HashMap::with_capacity_and_hasher(self.gaps.len(), Default::default());
         for (e, &(ca, cb, _)) in evaluated.into_iter().zip(&pairs) {
-            let (contact, gap) = e?;
+            let (contact, gap, film) = e?;
             if let Some(gap) = gap {
                 gaps.insert((ca, cb), gap);
+            }
+            if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film {
+                if let Some(h) = bodies.0 {
+                    add(h, force_on_a, torque_on_a);
+                }
+                if let Some(h) = bodies.1 {
+                    add(h, -force_on_a, torque_on_b);
+                }
             }
             let Some(Evaluated { pair, bodies, out, state }) = contact else { continue };
             alive.insert(pair, state);

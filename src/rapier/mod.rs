@@ -6,7 +6,10 @@
 //! is switched off (a physics hook returns `None`), and the discrete overlap-volume force is
 //! applied instead, with contact sub-steps: each sub-step is one rapier step of `dt / n` with
 //! one solver iteration, forces computed from the poses at its start (a leapfrog). Everything
-//! else rapier does — joints, gravity, contacts of unhandled pairs, events — keeps working.
+//! else rapier does — joints, gravity, contacts of unhandled pairs, events — keeps working,
+//! and rapier's pair rules hold for handled pairs too: collision and solver groups, active
+//! collision types, sensors, disabled colliders, joints with contacts disabled, and the user's
+//! `filter_contact_pair` hook on colliders that asked for it before they were handed over.
 //!
 //! **Small bodies**: rapier sizes its broad-phase margins by
 //! `integration_parameters.length_unit` (1 m by default). For millimetre bodies set it to their
@@ -53,6 +56,7 @@ use std::ops::Bound::{Excluded, Included};
 use crate::contact::{BodyState, ContactModel, ContactState};
 use crate::error::{check_positive, Error, Result};
 use crate::force::BodyKinematics;
+use crate::lubrication::Lubrication;
 use crate::material::{
     effective_modulus, hertz_contact_time, hertz_max_indentation, Friction, Material,
     PairParameters, StiffnessFactor,
@@ -146,9 +150,18 @@ struct Gap {
     poses: (Pose, Pose),
 }
 
-/// What a pair's check on a sub-step found: a contact, and the gap to remember when the pair
-/// is apart.
-type Checked = (Option<Evaluated>, Option<Gap>);
+/// The liquid film's force on a pair (see [`Lubrication`]): on A, the torques about each
+/// body's centre of mass; B takes minus the force.
+struct Film {
+    bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
+    force_on_a: Vector,
+    torque_on_a: Vector,
+    torque_on_b: Vector,
+}
+
+/// What a pair's check on a sub-step found: a contact, the gap to remember when the pair is
+/// apart, and the film's force when lubrication is on and the pair is within its cut-off.
+type Checked = (Option<Evaluated>, Option<Gap>, Option<Film>);
 
 /// How far any point of collider `h` may have moved between poses `from` and `to` (m): the
 /// translation plus the chord of the rotation at the farthest point, `2 r sin(θ/2) <= 2 r
@@ -216,6 +229,9 @@ pub struct DiscreteContacts {
     gaps: HashMap<(ColliderHandle, ColliderHandle), Gap>,
     periodic: Option<PeriodicBox>,
     indentation_limit: Real,
+    /// The liquid film's force between handled pairs, when set.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    lubrication: Option<Lubrication>,
     /// Bumped whenever the handled set changes.
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     generation: u64,
@@ -266,6 +282,7 @@ impl DiscreteContacts {
             gaps: HashMap::default(),
             periodic: None,
             indentation_limit: 0.5,
+            lubrication: None,
             generation: 0,
             neighbours: Default::default(),
         })
@@ -298,6 +315,21 @@ impl DiscreteContacts {
     /// The periodic box, when one is set.
     pub fn periodic(&self) -> Option<&PeriodicBox> {
         self.periodic.as_ref()
+    }
+
+    /// With the liquid film's normal force ([`Lubrication`]) between every handled pair
+    /// closer than its cut-off, beside the contact force (and through the contact, the gap
+    /// held at the film's minimum). The sub-step advice resolves the film's damping at its
+    /// minimum gap. For bodies immersed in a liquid whose solver does not resolve gaps below
+    /// the cut-off (see `coupling`).
+    pub fn with_lubrication(mut self, lubrication: Lubrication) -> Self {
+        self.lubrication = Some(lubrication);
+        self
+    }
+
+    /// The lubrication law, when set.
+    pub fn lubrication(&self) -> Option<&Lubrication> {
+        self.lubrication.as_ref()
     }
 
     /// With friction for every handled pair.

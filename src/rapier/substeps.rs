@@ -119,6 +119,17 @@ impl DiscreteContacts {
                     resolve(core::f64::consts::PI * (m_t / (kappa * k_n)).sqrt());
                 }
             }
+            // The film's damping `c` at its minimum gap: explicit steps resolve `m*/c`.
+            if let Some(lub) = &self.lubrication {
+                let r_star = crate::lubrication::reduced_radius(
+                    crate::lubrication::film_radius(&ha.shape),
+                    crate::lubrication::film_radius(&hb.shape),
+                );
+                let relaxation = m_star / lub.max_damping(r_star);
+                if relaxation.is_finite() && relaxation > 0.0 && relaxation < limit.0 {
+                    limit = (relaxation, relaxation);
+                }
+            }
             if worst.as_ref().is_none_or(|w| limit.0 < w.0) {
                 worst = Some((limit.0, limit.1, format!("colliders {ca:?} and {cb:?}")));
             }

@@ -13,6 +13,7 @@ use discrete_contact::rapier3d_f64::prelude::{
 
 use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod};
 use discrete_contact::error::Result;
+use discrete_contact::lubrication::Lubrication;
 use discrete_contact::material::Material;
 use discrete_contact::math::{Real, Vector};
 use discrete_contact::overlap::{IntegrationMode, OverlapSettings};
@@ -48,6 +49,13 @@ pub struct WetRebound {
     /// Contact enlargement (m): the gap at which the contact starts, standing for the
     /// lubrication film the lattice cannot resolve.
     pub enlargement: Real,
+    /// The liquid film's force below this gap (m; see [`Lubrication`]), for the gaps the
+    /// lattice does not resolve; `None`: no film force, the enlargement stands for it.
+    #[serde(default)]
+    pub film_cutoff: Option<Real>,
+    /// The film's minimum gap (m): surface roughness.
+    #[serde(default = "default_film_min_gap")]
+    pub film_min_gap: Real,
     /// Smoothing width of the solid fraction `d_B` (m).
     pub smoothing: Real,
     /// With the discrete contact (otherwise nothing but the fluid stops the sphere).
@@ -81,6 +89,8 @@ impl WetRebound {
             dt: 5e-6 * (dx / 0.3e-3).powi(2),
             n_c: 16,
             enlargement: dx / 7.0,
+            film_cutoff: None,
+            film_min_gap: default_film_min_gap(),
             smoothing: 0.5 * dx,
             contact: true,
             force_method: ForceMethod::default(),
@@ -104,6 +114,11 @@ impl WetRebound {
     pub fn measuring_gap(&self) -> Real {
         0.1 * self.radius
     }
+}
+
+/// The film's minimum gap unless set: 1 µm, the roughness of polished steel and glass spheres.
+fn default_film_min_gap() -> Real {
+    1e-6
 }
 
 /// What a run recorded.
@@ -223,6 +238,13 @@ impl ReboundRun {
                 .with_enlargement(0.5 * case.enlargement, 0.5 * case.enlargement)?;
             let mut c = DiscreteContacts::new(settings, case.dry_restitution)?
                 .with_policy(StepPolicy::AutoSubstep { max_substeps: 100_000 });
+            if let Some(cutoff) = case.film_cutoff {
+                c = c.with_lubrication(Lubrication::new(
+                    case.viscosity,
+                    cutoff,
+                    case.film_min_gap,
+                )?);
+            }
             c.handle(&mut world, sphere, case.sphere_material)?;
             for h in colliders {
                 c.handle(&mut world, h, case.wall_material)?;
