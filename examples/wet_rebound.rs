@@ -17,8 +17,8 @@
 //! forcing's momentum instead of Wen et al.'s link-wise momentum exchange; see
 //! `hlbm::ForceMethod`), `--enlargement 0.143` (contact enlargement, in Δx), `--lubrication`
 //! (the liquid film's force below the gap the lattice resolves, see
-//! `discrete_contact::lubrication`) with `--film-cutoff 0.667` (in Δx) and
-//! `--film-min-gap-um 1` (roughness, µm).
+//! `discrete_contact::lubrication`) with `--film-cutoff 1.2` (in Δx) and
+//! `--film-min-gap-um 16` (roughness, µm).
 //!
 //! Writes `target/validation/wet_rebound.csv` (`h0_mm,dx_mm,t_s,gap_mm`, with contact),
 //! `wet_rebound_no_contact.csv` (same columns), `wet_rebound_summary.csv` and
@@ -69,7 +69,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c.enlargement = args.number("--enlargement", 1.0 / 7.0) * c.dx;
         if args.flag("--lubrication") {
             c.film_cutoff = Some(args.number("--film-cutoff", FILM_CUTOFF) * c.dx);
-            c.film_min_gap = args.number("--film-min-gap-um", 1.0) * 1e-6;
+            c.film_min_gap = args.number("--film-min-gap-um", c.film_min_gap * 1e6) * 1e-6;
         }
         if args.flag("--forcing-momentum") {
             c.force_method = ForceMethod::Forcing;
