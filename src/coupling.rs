@@ -412,7 +412,7 @@ impl Fluid {
                 spin: (b.w * dt).to_array(),
             })
             .collect();
-        let mut field = std::mem::take(&mut self.lattice.particles);
+        let mut field = std::mem::take(self.lattice.particles_mut());
         let (origin, smoothing, lattice) = (self.origin, self.smoothing, &self.lattice);
         let inner_fluid = lattice.force_method() == ForceMethod::Forcing;
         // A fully periodic box without walls need not look up every node's kind.
@@ -480,14 +480,14 @@ impl Fluid {
             }
             sums
         });
-        self.lattice.particles = field;
+        *self.lattice.particles_mut() = field;
         let partial = partial?;
         let mut corrections = vec![(Vector::ZERO, Vector::ZERO); self.bodies.len()];
         for (id, cf, cm) in partial.into_iter().flatten() {
             corrections[id].0 += cf;
             corrections[id].1 += cm;
         }
-        report.particle_nodes = self.lattice.particles.len();
+        report.particle_nodes = self.lattice.particles().len();
         report.mach_warning = self.units.mach_warning(fastest);
         Ok(corrections)
     }
@@ -573,11 +573,13 @@ impl Fluid {
 
     /// Writes density, velocity and `d_B` as legacy VTK for ParaView (atomically).
     pub fn write_vtk(&self, path: &std::path::Path) -> Result<()> {
-        Ok(hlbm::vtk::write(
-            &self.lattice,
-            path,
-            self.units.dx(),
-            self.units.velocity_to_physical(1.0),
-        )?)
+        crate::io::write_atomically(path, |w| {
+            hlbm::vtk::write_to(
+                w,
+                &self.lattice,
+                self.units.dx(),
+                self.units.velocity_to_physical(1.0),
+            )
+        })
     }
 }

@@ -190,7 +190,7 @@ fn an_f32_lattice_resumed_from_a_checkpoint_is_bit_identical() {
     let mut lat = Lattice::new(12, 10, 8, 0.6).unwrap();
     lat.set_storage(Storage::F32);
     lat.set_body_acceleration([1e-5, 0.0, 0.0]);
-    lat.particles.add_sphere([5.2, 4.7, 3.9], 2.5, 1.0, [1e-3, 0.0, 0.0], 0).unwrap();
+    lat.particles_mut().add_sphere([5.2, 4.7, 3.9], 2.5, 1.0, [1e-3, 0.0, 0.0], 0).unwrap();
     lat.run(5).unwrap();
     let path = dir.join("lattice.ckpt");
     checkpoint::save(&path, "test/lattice", &lat).unwrap();

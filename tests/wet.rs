@@ -232,7 +232,7 @@ fn the_mapped_field_is_every_nodes_solid_fraction() {
         let (mut nodes, mut checked) = (0, 0);
         for z in 0..nz {
             for y in 0..ny {
-                let row = lattice.particles.row(z * ny + y);
+                let row = lattice.particles().row(z * ny + y);
                 assert!(
                     row.windows(2).all(|w| w[0].x < w[1].x),
                     "row ({y}, {z}) not sorted by x, or a node twice"
@@ -274,7 +274,7 @@ fn the_mapped_field_is_every_nodes_solid_fraction() {
                         }
                     }
                     let mapped = row.iter().find(|n| n.x as usize == x).map(|n| {
-                        let (body, arm, velocity) = lattice.particles.motion(n, y, z);
+                        let (body, arm, velocity) = lattice.particles().motion(n, y, z);
                         (body.id, n.d_b, Vector::from_array(arm), Vector::from_array(velocity))
                     });
                     match (mapped, expected) {

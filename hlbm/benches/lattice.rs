@@ -36,7 +36,7 @@ fn covered(lat: &mut Lattice) {
     for cz in centres(nz) {
         for cy in centres(ny) {
             for cx in centres(nx) {
-                lat.particles
+                lat.particles_mut()
                     .add_sphere([cx, cy, cz], 4.0, 1.0, [1e-3, 0.0, 0.0], id)
                     .expect("a sphere inside the lattice");
                 id += 1;

@@ -19,12 +19,12 @@ fn main() {
         }
         // Spheres of radius 4 on a 12-cell grid (~20 % of the nodes), `shift` cells along x.
         let place = |lat: &mut hlbm::Lattice, shift: f64| {
-            lat.particles.clear();
+            lat.particles_mut().clear();
             for (id, c) in (0..512)
                 .map(|k| [k % 8, (k / 8) % 8, k / 64].map(|i| 12.0 * i as f64 + 6.3))
                 .enumerate()
             {
-                lat.particles
+                lat.particles_mut()
                     .add_sphere([c[0] + shift, c[1], c[2]], 4.0, 1.0, [1e-3, 0.0, 0.0], id as u32)
                     .expect("a sphere inside the lattice");
             }

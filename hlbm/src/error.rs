@@ -37,14 +37,6 @@ pub enum Error {
         /// The offending speed (NaN for NaN).
         velocity: f64,
     },
-    /// An output file could not be written.
-    #[error("cannot write {path}: {message}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The system's message.
-        message: String,
-    },
 }
 
 /// `Result` with the lattice crate's [`Error`].

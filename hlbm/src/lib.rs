@@ -7,7 +7,7 @@
 //! momentum exchange, or the forcing's own momentum: [`ForceMethod`]), halfway bounce-back
 //! walls (moving allowed), periodic boundaries, one unit converter, NaN/runaway detection and
 //! VTK output. Populations are f64 by default; [`Storage::F32`] stores them as shifted f32
-//! (half the memory, measured as accurate; not faster on a compute-bound 2-core machine).
+//! (half the memory and bandwidth, as accurate for these flows; see `hlbm/PERFORMANCE.md`).
 //!
 //! ```
 //! use hlbm::{Lattice, UnitConverter};

@@ -98,10 +98,10 @@ fn taylor_green_decay(storage: Storage) {
 }
 
 fn moving_sphere(lat: &mut Lattice, v: [f64; 3]) {
-    lat.particles.clear();
+    lat.particles_mut().clear();
     let [nx, ny, nz] = lat.dims();
     let c = [nx as f64 / 2.0 - 0.3, ny as f64 / 2.0 + 0.2, nz as f64 / 2.0];
-    lat.particles.add_sphere(c, 4.0, 1.0, v, 7).expect("a sphere inside the lattice");
+    lat.particles_mut().add_sphere(c, 4.0, 1.0, v, 7).expect("a sphere inside the lattice");
 }
 
 #[test]
@@ -347,7 +347,7 @@ fn a_particle_at_rest_against_a_wall_feels_no_force() {
         lat.set_force_method(method);
         // Centre 3 cells above the wall's surface (z = 0.5): radius 4 reaches 1 cell into it.
         let c = [6.7, 7.2, 3.5];
-        let body = lat.particles.add_body(3, c, [0.0; 3], [0.0; 3]).unwrap();
+        let body = lat.particles_mut().add_body(3, c, [0.0; 3], [0.0; 3]).unwrap();
         for z in 1..n - 1 {
             for y in 0..n {
                 for x in 0..n {
@@ -357,7 +357,7 @@ fn a_particle_at_rest_against_a_wall_feels_no_force() {
                         1.0,
                     );
                     if d_b > 0.0 {
-                        lat.particles.add(body, [x, y, z].map(|i| i as i64), d_b).unwrap();
+                        lat.particles_mut().add(body, [x, y, z].map(|i| i as i64), d_b).unwrap();
                     }
                 }
             }
@@ -386,11 +386,11 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
     let dims = [16usize, 14, 12];
     for centre in [[7.3, 6.6, 5.1], [0.3, 13.6, 0.1]] {
         let mut lat = Lattice::new(dims[0], dims[1], dims[2], 0.8).unwrap();
-        lat.particles.add_sphere(centre, 4.0, 1.0, [0.0; 3], 1).unwrap();
+        lat.particles_mut().add_sphere(centre, 4.0, 1.0, [0.0; 3], 1).unwrap();
         let mut expected = 0;
         for z in 0..dims[2] {
             for y in 0..dims[1] {
-                let row = lat.particles.row(z * dims[1] + y);
+                let row = lat.particles().row(z * dims[1] + y);
                 for x in 0..dims[0] {
                     let image = |p: usize, d: usize| {
                         let v = p as f64 - centre[d];
@@ -405,7 +405,7 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
                     if d_b > 0.0 {
                         expected += 1;
                         let n = found.unwrap_or_else(|| panic!("node ({x}, {y}, {z}) missing"));
-                        let (_, lever, _) = lat.particles.motion(n, y, z);
+                        let (_, lever, _) = lat.particles().motion(n, y, z);
                         assert!(
                             (n.d_b - d_b).abs() < 1e-12
                                 && (0..3).all(|d| (lever[d] - arm[d]).abs() < 1e-12),
@@ -417,7 +417,7 @@ fn add_sphere_covers_the_sphere_and_refuses_bad_input_by_name() {
                 }
             }
         }
-        assert_eq!(lat.particles.len(), expected);
+        assert_eq!(lat.particles().len(), expected);
     }
     let mut field = hlbm::ParticleField::new(16, 14, 12);
     assert_eq!(name(field.add_sphere([1.0; 3], -1.0, 1.0, [0.0; 3], 0).unwrap_err()), "radius");
@@ -482,8 +482,8 @@ fn solid_fraction_falls_monotonically_and_sums_to_the_volume() {
     assert!((hlbm::solid_fraction(0.0, eps) - 0.5).abs() < 1e-15);
     for radius in [3.0, 4.5, 6.0] {
         let mut lat = Lattice::new(20, 20, 20, 0.8).unwrap();
-        lat.particles.add_sphere([9.71, 10.13, 9.37], radius, eps, [0.0; 3], 1).unwrap();
-        let sum: f64 = (0..400).flat_map(|r| lat.particles.row(r).iter().map(|n| n.d_b)).sum();
+        lat.particles_mut().add_sphere([9.71, 10.13, 9.37], radius, eps, [0.0; 3], 1).unwrap();
+        let sum: f64 = (0..400).flat_map(|r| lat.particles().row(r).iter().map(|n| n.d_b)).sum();
         let volume = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
         assert!(
             (sum / volume - 1.0).abs() < 0.02,

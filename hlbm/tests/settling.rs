@@ -45,8 +45,8 @@ fn settles_at_the_schiller_naumann_velocity(method: ForceMethod, storage: Storag
     let mut v = [0.0f64; 3];
     let mut history = Vec::new();
     for _ in 0..1500 {
-        lat.particles.clear();
-        lat.particles.add_sphere(c, r, eps, v, 0).expect("a sphere inside the lattice");
+        lat.particles_mut().clear();
+        lat.particles_mut().add_sphere(c, r, eps, v, 0).expect("a sphere inside the lattice");
         let report = lat.step().unwrap();
         let f = report.particle_forces[&0].force;
         let weight = [0.0, 0.0, -(ratio - 1.0) * volume * g];
