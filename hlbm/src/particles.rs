@@ -9,8 +9,7 @@ use crate::error::{Error, Result};
 /// periodic image of the lattice that body sees it (so a body straddling a periodic face gets
 /// the right lever arm on both sides).
 /// Kept small (16 bytes) because the mapping writes and the sweep and the links read every
-/// node each step: per-node velocities and lever arms made that a quarter of a dense
-/// suspension's memory traffic.
+/// node each step: velocities and lever arms are looked up per body, not stored per node.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ParticleNode {
