@@ -440,25 +440,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         self.clip(
             first,
             p,
-            &mut |cutter, outer| {
-                // The first clip's crossings are done; the second clip's are final.
-                cutter.need_other = false;
-                cutter.clip(
-                    second,
-                    outer,
-                    &mut |cutter, r| {
-                        let sums = &mut cutter.sums;
-                        for v in r {
-                            sums.lo = sums.lo.min(v.x);
-                            sums.hi = sums.hi.max(v.x);
-                        }
-                        let v = tet_volume(r) * weight;
-                        sums.volume += v;
-                        sums.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
-                    },
-                    &mut |cutter, tri, outward| cutter.sums.add_facet(second, tri, outward),
-                );
-            },
+            &mut |cutter, outer| cutter.last_clip(second, outer, weight),
             &mut |cutter, tri, outward| {
                 if own_facets {
                     cutter.need_other = false;
@@ -466,6 +448,28 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                     cutter.sums.add_facet(first, &poly[..len], outward);
                 }
             },
+        );
+    }
+
+    /// Clips `outer`, a piece inside the other body, by body `second`: adds `weight` times the
+    /// volume and moment of what lies inside, and `second`'s facets to the normal.
+    fn last_clip(&mut self, second: usize, outer: &[Vert; 4], weight: Real) {
+        // The first clip's crossings are done; the second clip's are final.
+        self.need_other = false;
+        self.clip(
+            second,
+            outer,
+            &mut |cutter, r| {
+                let sums = &mut cutter.sums;
+                for v in r {
+                    sums.lo = sums.lo.min(v.x);
+                    sums.hi = sums.hi.max(v.x);
+                }
+                let v = tet_volume(r) * weight;
+                sums.volume += v;
+                sums.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
+            },
+            &mut |cutter, tri, outward| cutter.sums.add_facet(second, tri, outward),
         );
     }
 
@@ -479,10 +483,12 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     fn tet(&mut self, p: &[Vert; 4]) {
         let count = |s: usize| p.iter().filter(|v| v.d[s] <= 0.0).count();
         let (na, nb) = (count(0), count(1));
+        // Wholly inside one body, the first clip keeps the tetrahedron whole: only the second
+        // runs (the same arithmetic as `ordered`).
         if na == 4 {
-            self.ordered(0, p, 1.0, false);
+            self.last_clip(1, p, 1.0);
         } else if nb == 4 {
-            self.ordered(1, p, 1.0, false);
+            self.last_clip(0, p, 1.0);
         } else {
             let sum = |s: usize| p.iter().map(|v| v.d[s]).sum::<Real>();
             let first = match nb.cmp(&na).then_with(|| sum(0).total_cmp(&sum(1))) {
