@@ -831,3 +831,65 @@ fn the_tangential_spring_is_symmetric_and_moves_rigidly_with_the_pair() {
         "A↔B differ by {ab:e}, rotated by {rigid:e} of the largest force"
     );
 }
+
+/// Two bodies with curved edges (cylinders, cones, rounded boxes), turned at random and moved
+/// apart by a small gap, are never joined on a coarse grid: a bent cell's tangent planes hold
+/// the bodies with their curvature error, which can exceed the gap, and the cell must not
+/// report an overlap that no point of both bodies is in.
+#[test]
+fn curved_edges_apart_by_less_than_a_coarse_cell_are_not_joined() {
+    use discrete_contact::compute_overlap;
+    use discrete_contact::parry3d_f64::query::distance;
+    use discrete_contact::parry3d_f64::shape::SharedShape;
+    // Sizes from 1 to ~7: a small body's edge against a large one's rim.
+    let shapes = [
+        SharedShape::cylinder(1.0, 0.5),
+        SharedShape::cone(0.8, 0.6),
+        SharedShape::round_cuboid(1.0, 0.6, 0.35, 0.1),
+        SharedShape::cylinder(6.7, 3.2),
+        SharedShape::round_cuboid(4.0, 2.0, 3.0, 0.5),
+    ];
+    let mut seed = 0x2545_F491_4F6C_DD1Du64;
+    let mut rnd = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut apart = 0;
+    for k in 0..250 {
+        let (pa, pb) = (&shapes[k % 5], &shapes[(k / 5) % 5]);
+        let (a, b) =
+            (ConvexShape::from_parry(&**pa).unwrap(), ConvexShape::from_parry(&**pb).unwrap());
+        let mut rot = || {
+            let axis = Vector::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
+            Rotation::from_axis_angle(axis, 6.3 * rnd())
+        };
+        let (ra, rb) = (rot(), rot());
+        let dir = Vector::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
+        let gap = 0.002 + 0.02 * rnd();
+        let far = 20.0;
+        // Bisect the centre distance to the gap.
+        let pose_b = |t: f64| Pose::from_parts(dir * t, rb);
+        let pose_a = Pose::from_parts(Vector::ZERO, ra);
+        let (mut lo, mut hi) = (0.0, far);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            let d = distance(&pose_a, &**pa, &pose_b(mid), &**pb).unwrap().distance;
+            if d < gap {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let pb_pose = pose_b(hi);
+        assert!(distance(&pose_a, &**pa, &pb_pose, &**pb).unwrap().distance >= gap * (1.0 - 1e-9));
+        for n_c in 1..=3 {
+            let s = OverlapSettings::new(n_c, IntegrationMode::Subcell).unwrap();
+            let g = compute_overlap(&a, &pose_a, &b, &pb_pose, &s, None).unwrap();
+            assert!(g.is_none(), "pair {k} at N_c = {n_c}, gap {gap}: {g:?}");
+            apart += 1;
+        }
+    }
+    assert_eq!(apart, 750);
+}

@@ -27,8 +27,11 @@ use crate::math::{Real, Vector};
 /// the tetrahedra.
 const MAX_VERTS: usize = 256;
 
+/// Planes at most per cell: the samples' and those added by [`refine`](super::subcell).
+pub(super) const MAX_PLANES: usize = 64;
+
 /// Faces at most: the cell's six and one per plane.
-const MAX_FACES: usize = 6 + 32;
+const MAX_FACES: usize = 6 + MAX_PLANES;
 
 /// A tangent plane `n·y <= h` of body `body` (0: A, 1: B).
 #[derive(Clone, Copy, Debug)]
@@ -61,6 +64,14 @@ pub(super) struct Scratch {
     cap: Vec<Vector>,
     /// Each vertex's signed distance from the plane being clipped.
     sides: Vec<Real>,
+    /// Which of `polys` holds the last clip's result.
+    current: usize,
+    /// Distances from a plane below this count as on it (relative to the cell's size).
+    tol: Real,
+    /// The result's distinct vertices, gathered by [`Scratch::gather_vertices`].
+    pub(super) vertices: Vec<Vector>,
+    /// The planes [`clip_cell`] and [`clip_more`] clip by.
+    pub(super) planes: Vec<Plane>,
 }
 
 impl Scratch {
@@ -71,6 +82,24 @@ impl Scratch {
             polys: [poly(), poly()],
             cap: Vec::with_capacity(2 * MAX_FACES),
             sides: Vec::with_capacity(MAX_VERTS),
+            current: 0,
+            tol: 0.0,
+            vertices: Vec::with_capacity(MAX_VERTS),
+            planes: Vec::with_capacity(MAX_PLANES),
+        }
+    }
+
+    /// Gathers into `vertices` the distinct vertices of the last clip's polyhedron.
+    pub(super) fn gather_vertices(&mut self) {
+        let Self { polys, vertices, current, .. } = self;
+        let poly = &polys[*current];
+        vertices.clear();
+        for f in &poly.faces {
+            for v in &poly.verts[f.start..f.start + f.len] {
+                if !vertices.contains(v) {
+                    vertices.push(*v);
+                }
+            }
         }
     }
 }
@@ -93,39 +122,46 @@ pub(super) fn cuts(plane: &Plane, lo: Vector, hi: Vector, tol: Real) -> bool {
     plane.n.dot(mid) + plane.n.abs().dot(half) > plane.h + tol
 }
 
-/// The cell `lo`–`hi` clipped by `planes`: `Some` with its integrals (zero volume when the
-/// planes cut it away), `None` when the polyhedron would outgrow the buffers (the caller
-/// integrates the cell's tetrahedra instead).
-pub(super) fn clip_cell(
-    lo: Vector,
-    hi: Vector,
-    planes: &mut [Plane],
-    scratch: &mut Scratch,
-) -> Option<Clipped> {
-    let size = (hi - lo).length();
-    let tol = 1e-12 * size;
-    // An order by the geometry: the same for either labelling of the bodies.
+/// Sets the polyhedron to the cell `lo`–`hi` clipped by all of `scratch.planes` and returns
+/// its integrals; `None` when the polyhedron would outgrow the buffers (the caller integrates
+/// the cell's tetrahedra instead). Zero volume when the planes cut the cell away.
+pub(super) fn clip_cell(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option<Clipped> {
+    scratch.tol = 1e-12 * (hi - lo).length();
+    scratch.current = 0;
+    cell_faces(lo, hi, &mut scratch.polys[0]);
+    clip_more(0, scratch)
+}
+
+/// Clips the polyhedron of the last [`clip_cell`] by `scratch.planes[from..]` and returns the
+/// integrals of what is left (`None` as there).
+///
+/// The planes are clipped in an order given by the geometry alone (sorted by their
+/// coefficients): the same for either labelling of the bodies.
+pub(super) fn clip_more(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
+    let Scratch { polys, cap, sides, current, tol, planes, .. } = scratch;
+    let planes = &mut planes[from..];
     planes.sort_unstable_by(|p, q| {
         (p.n.x.total_cmp(&q.n.x))
             .then(p.n.y.total_cmp(&q.n.y))
             .then(p.n.z.total_cmp(&q.n.z))
             .then(p.h.total_cmp(&q.h))
     });
-    let Scratch { polys, cap, sides } = scratch;
-    let [mut cur, mut next] = [0usize, 1];
-    cell_faces(lo, hi, &mut polys[cur]);
+    let mut next = 1 - *current;
     for &p in planes.iter() {
-        let (a, b) = polys.split_at_mut(1);
-        let (from, to) = if cur == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) };
-        match clip(from, to, cap, sides, p, tol)? {
-            false => continue,
-            true => std::mem::swap(&mut cur, &mut next),
-        }
-        if polys[cur].faces.is_empty() {
+        if polys[*current].faces.is_empty() {
             break;
         }
+        let (a, b) = polys.split_at_mut(1);
+        let (from, to) = if *current == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) };
+        if clip(from, to, cap, sides, p, *tol)? {
+            std::mem::swap(current, &mut next);
+        }
     }
-    let poly = &polys[cur];
+    Some(integrals(&polys[*current]))
+}
+
+/// Volume, first moment, per-body facet area vectors and areas, and the box of `poly`.
+fn integrals(poly: &Poly) -> Clipped {
     let mut out = Clipped {
         volume: 0.0,
         moment: Vector::ZERO,
@@ -136,7 +172,7 @@ pub(super) fn clip_cell(
     };
     let points: usize = poly.faces.iter().map(|f| f.len).sum();
     if points == 0 {
-        return Some(out);
+        return out;
     }
     let inner = poly
         .faces
@@ -163,7 +199,7 @@ pub(super) fn clip_cell(
             out.area[s] += area;
         }
     }
-    Some(out)
+    out
 }
 
 /// The six faces of the box `lo`–`hi`.
@@ -271,8 +307,9 @@ mod tests {
     #[test]
     fn a_cell_halved_by_a_diagonal_plane() {
         let n = Vector::new(1.0, 1.0, 0.0).normalize();
-        let mut planes = [Plane { n, h: n.dot(Vector::new(0.5, 0.5, 0.0)), body: 1 }];
-        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut planes, &mut Scratch::new()).unwrap();
+        let mut scratch = Scratch::new();
+        scratch.planes.push(Plane { n, h: n.dot(Vector::new(0.5, 0.5, 0.0)), body: 1 });
+        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch).unwrap();
         assert!((c.volume - 0.5).abs() < 1e-14);
         let centroid = c.moment / c.volume;
         assert!((centroid - Vector::new(1.0 / 3.0, 1.0 / 3.0, 0.5)).length() < 1e-14);
@@ -283,18 +320,17 @@ mod tests {
     /// they bound; a plane that misses the cell changes nothing, one beyond it empties it.
     #[test]
     fn an_edge_through_the_cell_is_kept_sharp() {
-        let mut planes = [
+        let mut scratch = Scratch::new();
+        scratch.planes.extend([
             Plane { n: Vector::X, h: 0.5, body: 0 },
             Plane { n: Vector::Y, h: 0.5, body: 0 },
             Plane { n: Vector::Z, h: 2.0, body: 1 },
-        ];
-        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut planes, &mut Scratch::new()).unwrap();
+        ]);
+        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch).unwrap();
         assert!((c.volume - 0.25).abs() < 1e-14);
         assert!((c.area[0] - 1.0).abs() < 1e-14 && c.area[1] == 0.0);
-        let mut beyond = [Plane { n: -Vector::Z, h: -1.5, body: 1 }];
-        assert_eq!(
-            clip_cell(Vector::ZERO, Vector::ONE, &mut beyond, &mut Scratch::new()).unwrap().volume,
-            0.0
-        );
+        scratch.planes.clear();
+        scratch.planes.push(Plane { n: -Vector::Z, h: -1.5, body: 1 });
+        assert_eq!(clip_cell(Vector::ZERO, Vector::ONE, &mut scratch).unwrap().volume, 0.0);
     }
 }

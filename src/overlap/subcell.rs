@@ -64,6 +64,13 @@ const MEMO: usize = 48;
 /// Points per body whose tangent planes clip a bent cell: corners, centre, face centres.
 const SAMPLES: usize = 15;
 
+/// Rounds of [`Cutter::refine`] at most per bent cell.
+const REFINE_ROUNDS: usize = 4;
+
+/// A vertex of a bent cell's polyhedron farther than this fraction of the cell's diagonal
+/// outside a body is cut off by the body's tangent plane there.
+const REFINE_TOL: Real = 1e-3;
+
 /// A cell is bent when the distance at its centre differs from its corners' mean by more
 /// than this fraction of its diagonal.
 const BENT: Real = 0.005;
@@ -641,11 +648,21 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                     1
                 }
             };
-            let (mut planes, len) =
-                self.tangent_planes(c, [samples(0, in_a), samples(1, in_b)], [ca, cb]);
-            if let Some(k) =
-                crease::clip_cell(c[0].x, c[7].x, &mut planes[..len], &mut self.scratch)
-            {
+            let samples = [samples(0, in_a), samples(1, in_b)];
+            self.tangent_planes(c, samples, [ca, cb]);
+            let mut clipped = crease::clip_cell(c[0].x, c[7].x, &mut self.scratch);
+            let mut rounds = 0;
+            while let Some(k) = clipped {
+                // Only a cell with no corner in both bodies can hold a polyhedron that misses
+                // the overlap altogether (two bodies apart by less than the planes' error).
+                if k.volume > 0.0 && in_a & in_b == 0 && rounds < REFINE_ROUNDS {
+                    let len = self.scratch.planes.len();
+                    if self.refine(samples.map(|n| n > 0), diagonal) {
+                        clipped = crease::clip_more(len, &mut self.scratch);
+                        rounds += 1;
+                        continue;
+                    }
+                }
                 let it = &mut self.sums;
                 if k.volume > 0.0 {
                     it.volume += k.volume;
@@ -668,16 +685,54 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
     }
 
+    /// Adds to the cell's planes the tangent plane of each clipping body (`clips`) at every
+    /// vertex of the last clipped polyhedron that lies outside it by more than [`REFINE_TOL`]
+    /// of the cell's `diagonal`; whether it added any. None when a vertex lies in both bodies
+    /// (the overlap is real), when no vertex lies outside, or when they would not all fit: the
+    /// cell keeps its last clip then.
+    ///
+    /// The sample planes hold the overlap with the surfaces' curvature error; on a strongly
+    /// curved face (a cylinder's rim in a coarse cell) that error can exceed a thin gap and
+    /// join two bodies that are apart. A plane at a vertex beyond the surface cuts that vertex
+    /// off (a cutting-plane iteration), so each round brings the polyhedron closer to the true
+    /// overlap, until it holds a point of both bodies or vanishes. Where the overlap is real
+    /// the planes' outer error stays: it balances the interpolated cells' inner one. Both
+    /// bodies are tested alike at every vertex and all planes found are added (the clip sorts
+    /// them), so either labelling adds the same planes.
+    fn refine(&mut self, clips: [bool; 2], diagonal: Real) -> bool {
+        let tol = REFINE_TOL * diagonal;
+        let pair = self.pair;
+        self.scratch.gather_vertices();
+        let crease::Scratch { vertices, planes, .. } = &mut self.scratch;
+        let len = planes.len();
+        for &x in vertices.iter() {
+            let d = pair.both(x);
+            if d.0 <= 0.0 && d.1 <= 0.0 {
+                // A point of the overlap: the bodies do overlap in the cell.
+                planes.truncate(len);
+                return false;
+            }
+            for s in (0..2).filter(|&s| clips[s] && [d.0, d.1][s] > tol) {
+                let g = if s == 0 { pair.a.gradient(x) } else { pair.b.gradient(x) };
+                let g = g.normalize_or_zero();
+                if !(g.is_finite() && g != Vector::ZERO) {
+                    continue;
+                }
+                if planes.len() == crease::MAX_PLANES {
+                    planes.truncate(len);
+                    return false;
+                }
+                planes.push(Plane { n: g, h: g.dot(x) - [d.0, d.1][s], body: s });
+            }
+        }
+        planes.len() > len
+    }
+
     /// The tangent planes of each body at the first `samples` of the cell's centre (distances
     /// `centre`), its eight corners and its six face centres: an edge through the cell has
     /// points on each of its faces' sides among them, and a corner reaching in has its faces'
-    /// nearest points.
-    fn tangent_planes(
-        &mut self,
-        c: &[Vert; 8],
-        samples: [usize; 2],
-        centre: [Real; 2],
-    ) -> ([Plane; 2 * SAMPLES], usize) {
+    /// nearest points. They replace the scratch's planes.
+    fn tangent_planes(&mut self, c: &[Vert; 8], samples: [usize; 2], centre: [Real; 2]) {
         let mid = (c[0].x + c[7].x) * 0.5;
         let mut points = [(mid, centre); SAMPLES];
         for (i, v) in c.iter().enumerate() {
@@ -702,8 +757,8 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             }
             points[9 + f] = (x, d);
         }
-        let mut planes = [Plane { n: Vector::ZERO, h: 0.0, body: 0 }; 2 * SAMPLES];
-        let mut len = 0;
+        let mut planes = std::mem::take(&mut self.scratch.planes);
+        planes.clear();
         let tol = 1e-12 * (c[7].x - c[0].x).length();
         for s in 0..2 {
             for (k, &(x, d)) in points[..samples[s]].iter().enumerate() {
@@ -732,12 +787,11 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 let same = |q: &Plane| {
                     q.body == s && (q.n - plane.n).length() <= 1e-12 && (q.h - plane.h).abs() <= tol
                 };
-                if crease::cuts(&plane, c[0].x, c[7].x, tol) && !planes[..len].iter().any(same) {
-                    planes[len] = plane;
-                    len += 1;
+                if crease::cuts(&plane, c[0].x, c[7].x, tol) && !planes.iter().any(same) {
+                    planes.push(plane);
                 }
             }
         }
-        (planes, len)
+        self.scratch.planes = planes;
     }
 }
