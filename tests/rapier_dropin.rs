@@ -259,3 +259,56 @@ fn joints_without_contacts_and_the_users_pair_filter_are_honoured() {
         );
     }
 }
+
+/// A soft ball resting on the floor beside a steel ball bouncing off it: the steel impact sets
+/// the world's sub-step; with pair rates the resting contact is evaluated far less often, and
+/// neither ball notices — the bounce is the same to round-off (the bodies do not touch), the
+/// resting ball's height the same within a hundredth of its indentation.
+#[test]
+fn pair_rates_evaluate_a_resting_contact_less_often_and_change_neither_body() {
+    use discrete_contact::math::Vector;
+    let run = |pair_rates: bool| {
+        let mut world = PhysicsWorld::new();
+        world.integration_parameters.dt = 1e-4;
+        let floor = world.insert_body(RigidBodyBuilder::fixed());
+        let floor_c = world
+            .insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(floor));
+        let ball = |world: &mut PhysicsWorld, x: f64, y: f64, vy: f64, density: f64| {
+            let b = world.insert_body(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(x, y, 0.0))
+                    .linvel(Vector::new(0.0, vy, 0.0)),
+            );
+            (b, world.insert_collider(ColliderBuilder::ball(0.01).density(density), Some(b)))
+        };
+        let (steel, steel_c) = ball(&mut world, 0.0, 0.0101, -2.0, 7800.0);
+        // Resting at about its static indentation under gravity.
+        let (rubber, rubber_c) = ball(&mut world, 0.05, 0.00999, 0.0, 1000.0);
+        let mut contacts =
+            DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9)
+                .unwrap()
+                .with_policy(StepPolicy::AutoSubstep { max_substeps: 5000 })
+                .with_pair_rates(pair_rates);
+        let steel_m = Material::new(2e11, 0.3).unwrap();
+        contacts.handle(&mut world, floor_c, steel_m).unwrap();
+        contacts.handle(&mut world, steel_c, steel_m).unwrap();
+        contacts.handle(&mut world, rubber_c, Material::new(1e7, 0.45).unwrap()).unwrap();
+        let (mut evaluations, mut contact_substeps) = (0, 0);
+        for _ in 0..20 {
+            let s = contacts.step(&mut world).unwrap();
+            evaluations += s.evaluations;
+            contact_substeps += s.substeps * s.contacts.max(1);
+        }
+        let (vy, y) = (world.bodies[steel].linvel().y, world.bodies[rubber].translation().y);
+        (vy, y, evaluations, contact_substeps)
+    };
+    let (vy_one, y_one, evals_one, _) = run(false);
+    let (vy_own, y_own, evals_own, substeps) = run(true);
+    assert!(vy_one > 1.5, "the steel ball bounced: {vy_one}");
+    assert!((vy_own - vy_one).abs() <= 1e-9 * vy_one.abs(), "bounce {vy_own} vs {vy_one}");
+    assert!((y_own - y_one).abs() <= 0.01 * (0.01 - y_one).abs(), "height {y_own} vs {y_one}");
+    assert!(
+        2 * evals_own < evals_one,
+        "{evals_own} evaluations with pair rates, {evals_one} without ({substeps})"
+    );
+}
