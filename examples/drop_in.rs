@@ -4,13 +4,12 @@
 //! lines marked below. Prints kinetic energy, largest overlap and wall time as the pile
 //! settles, and writes `target/validation/drop_in.csv`.
 //!
-//! `cargo run --release --example drop_in [-- --bodies 180 --seconds 1.0 --nc 4 --per-contact 6 --reuse 0.25 --pair-rates]`
+//! `cargo run --release --example drop_in [-- --bodies 180 --seconds 1.0 --nc 4 --per-contact 6 --reuse 0.25]`
 //! (about four minutes on 2 cores; the run time grows with bodies × seconds). `--exact` computes
 //! the sphere pairs (and spheres on the floor) in closed form and the pairs of cubes, convex
 //! polyhedra, walls and the plank as exact polyhedra; the rest (cylinders, sphere–box) on the
 //! grid. `--reuse f` sets the geometry reuse (0: every contact evaluated in full on every
-//! sub-step); `--pair-rates` evaluates each live contact at its own rate
-//! (`DiscreteContacts::with_pair_rates`).
+//! sub-step).
 
 #[path = "common/mod.rs"]
 mod common;
@@ -42,7 +41,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let per_contact = args.number("--per-contact", 6.0);
     let n_c = args.number("--nc", 4.0) as usize;
     let exact = args.flag("--exact");
-    let pair_rates = args.flag("--pair-rates");
     let reuse = discrete_contact::contact::check_reuse(
         args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE),
     )
@@ -86,13 +84,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         overlap.with_closed_form_spheres(exact).with_exact_polyhedra(exact),
         per_contact,
     )?
-    .with_geometry_reuse(reuse)?
-    .with_pair_rates(pair_rates);
+    .with_geometry_reuse(reuse)?;
     let handled = contacts.handle_all(&mut world, drop_in::rubber()?)?;
     // (then `contacts.step(&mut world)?` where the loop had `world.step()`)
 
     let forms = if exact { ", exact forms where they exist" } else { "" };
-    println!("\ndiscrete contacts ({handled} colliders handled, sub-cell N_c = {n_c}{forms}, rubber E = 5 MPa, e = 0.5, μ = 0.5/0.4, {per_contact} sub-steps per contact time, geometry reuse {reuse}, {}):", if pair_rates { "each contact at its own rate" } else { "every contact on every sub-step" });
+    println!("\ndiscrete contacts ({handled} colliders handled, sub-cell N_c = {n_c}{forms}, rubber E = 5 MPa, e = 0.5, μ = 0.5/0.4, {per_contact} sub-steps per contact time, geometry reuse {reuse}):");
     println!(
         "{:>6} {:>12} {:>9} {:>9} {:>10} {:>14} {:>8}",
         "t (s)", "KE (J)", "contacts", "sub/step", "full/c/step", "max overlap", "wall (s)"

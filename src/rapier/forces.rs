@@ -138,24 +138,18 @@ impl DiscreteContacts {
     /// force and torque as they were before (for [`take_back`]).
     ///
     /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
-    /// candidates' order afterwards, so the result does not depend on the thread count. A pair
-    /// not due on sub-step `sub` (see [`with_pair_rates`](Self::with_pair_rates)) keeps its
-    /// state and its last force.
+    /// candidates' order afterwards, so the result does not depend on the thread count.
     pub(super) fn apply_forces(
         &mut self,
         world: &mut PhysicsWorld,
         hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
-        sub: usize,
     ) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
         let pairs = self.candidate_pairs(world, hooks)?;
         let eps = self.settings.enlargement();
         let this = &*self;
         let w = &*world;
         let evaluate = |&(ca, cb, shift): &Candidate| -> Result<Checked> {
-            if sub % this.intervals.get(&(ca, cb)).copied().unwrap_or(1) != 0 {
-                return Ok(None);
-            }
             let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
             let ColliderMotion { pose: pa, kinematics: ka, body: ba, .. } = Self::kinematics(w, ca);
             let ColliderMotion { pose: mut pb, kinematics: mut kb, body: bb, .. } =
@@ -172,22 +166,22 @@ impl DiscreteContacts {
             if state.is_none() {
                 if let Some(gap) = this.gaps.get(&(ca, cb)) {
                     if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) < gap.margin {
-                        return Ok(Some((None, Some(*gap), None)));
+                        return Ok((None, Some(*gap), None));
                     }
                 }
                 let distance = parry3d_f64::query::distance(&pa, sa, &pb, sb)
                     .map_or(Real::NAN, |d| d.distance);
                 let margin = distance - this.reach();
                 if margin > 0.0 {
-                    return Ok(Some((None, Some(Gap { margin, poses: (pa, pb) }), None)));
+                    return Ok((None, Some(Gap { margin, poses: (pa, pb) }), None));
                 }
                 if distance - (eps[0] + eps[1]) > 0.0 {
                     // Within the film's reach, not in contact.
-                    return Ok(Some((
+                    return Ok((
                         None,
                         None,
                         this.film(ha, hb, (&pa, sa, &ka, ba), (&pb, sb, &kb, bb)),
-                    )));
+                    ));
                 }
             }
             let film = this.film(ha, hb, (&pa, sa, &ka, ba), (&pb, sb, &kb, bb));
@@ -206,7 +200,7 @@ impl DiscreteContacts {
                 &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
                 &mut state,
             )?;
-            Ok(Some((
+            Ok((
                 out.zip(state).map(|(out, state)| Evaluated {
                     pair: (ca, cb),
                     bodies: (ba, bb),
@@ -215,7 +209,7 @@ impl DiscreteContacts {
                 }),
                 None,
                 film,
-            )))
+            ))
         };
         #[cfg(feature = "parallel")]
         let evaluated: Vec<Result<Checked>> = {
@@ -234,28 +228,8 @@ impl DiscreteContacts {
             e.1 += t;
         };
         let mut gaps = HashMap::with_capacity_and_hasher(self.gaps.len(), Default::default());
-        let mut held = HashMap::with_capacity_and_hasher(self.held.len(), Default::default());
         for (e, &(ca, cb, _)) in evaluated.into_iter().zip(&pairs) {
-            let Some((contact, gap, film)) = e? else {
-                // Not due: the pair keeps what it had.
-                let pair = (ca, cb);
-                if let Some(s) = self.states.get(&pair) {
-                    alive.insert(pair, *s);
-                }
-                if let Some(g) = self.gaps.get(&pair) {
-                    gaps.insert(pair, *g);
-                }
-                if let Some(h) = self.held.get(&pair) {
-                    held.insert(pair, *h);
-                    if let Some(b) = h.bodies.0 {
-                        add(b, h.force_on_a, h.torque_on_a);
-                    }
-                    if let Some(b) = h.bodies.1 {
-                        add(b, -h.force_on_a, h.torque_on_b);
-                    }
-                }
-                continue;
-            };
+            let (contact, gap, film) = e?;
             if let Some(gap) = gap {
                 gaps.insert((ca, cb), gap);
             }
@@ -279,21 +253,9 @@ impl DiscreteContacts {
             if let Some(h) = bodies.1 {
                 add(h, -f.force_on_a, f.torque_on_b);
             }
-            if !self.intervals.is_empty() {
-                held.insert(
-                    pair,
-                    Held {
-                        bodies,
-                        force_on_a: f.force_on_a,
-                        torque_on_a: f.torque_on_a,
-                        torque_on_b: f.torque_on_b,
-                    },
-                );
-            }
         }
         self.states = alive;
         self.gaps = gaps;
-        self.held = held;
         let mut applied = Vec::with_capacity(added.len());
         for (h, (f, t)) in added {
             if let Some(rb) = world.bodies.get_mut(h) {

@@ -134,19 +134,6 @@ struct ColliderMotion {
 /// first (zero without periodic axes).
 type Candidate = (ColliderHandle, ColliderHandle, Vector);
 
-/// Two colliders, in the order the pair searches give them.
-type ColliderPair = (ColliderHandle, ColliderHandle);
-
-/// A contact's last force, kept for the sub-steps between its evaluations (see
-/// [`DiscreteContacts::with_pair_rates`]): the bodies, the force on A, the torques on A and B.
-#[derive(Clone, Copy)]
-struct Held {
-    bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
-    force_on_a: Vector,
-    torque_on_a: Vector,
-    torque_on_b: Vector,
-}
-
 /// One evaluated contact, before its forces are summed.
 struct Evaluated {
     pair: (ColliderHandle, ColliderHandle),
@@ -173,9 +160,8 @@ struct Film {
 }
 
 /// What a pair's check on a sub-step found: a contact, the gap to remember when the pair is
-/// apart, and the film's force when lubrication is on and the pair is within its cut-off;
-/// `None` when the pair is not due this sub-step (it keeps its state and force).
-type Checked = Option<(Option<Evaluated>, Option<Gap>, Option<Film>)>;
+/// apart, and the film's force when lubrication is on and the pair is within its cut-off.
+type Checked = (Option<Evaluated>, Option<Gap>, Option<Film>);
 
 /// How far any point of collider `h` may have moved between poses `from` and `to` (m): the
 /// translation plus the chord of the rotation at the farthest point, `2 r sin(θ/2) <= 2 r
@@ -243,15 +229,6 @@ pub struct DiscreteContacts {
     gaps: HashMap<(ColliderHandle, ColliderHandle), Gap>,
     periodic: Option<PeriodicBox>,
     indentation_limit: Real,
-    /// Whether each live contact is evaluated at its own rate ([`with_pair_rates`](Self::with_pair_rates)).
-    #[cfg_attr(feature = "checkpoint", serde(default = "default_pair_rates"))]
-    pair_rates: bool,
-    /// This step's sub-step interval of each pair evaluated less often than every sub-step.
-    #[cfg_attr(feature = "checkpoint", serde(skip))]
-    intervals: HashMap<ColliderPair, usize>,
-    /// The last force of each live contact within this step.
-    #[cfg_attr(feature = "checkpoint", serde(skip))]
-    held: HashMap<ColliderPair, Held>,
     /// The liquid film's force between handled pairs, when set.
     #[cfg_attr(feature = "checkpoint", serde(default))]
     lubrication: Option<Lubrication>,
@@ -261,11 +238,6 @@ pub struct DiscreteContacts {
     /// The neighbour search's memory; rebuilt from the bodies when empty (after a restart).
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     neighbours: std::sync::Mutex<Neighbours>,
-}
-
-/// Pair rates are off unless switched on.
-fn default_pair_rates() -> bool {
-    false
 }
 
 /// The drop-in's tangential law unless set: the spring, so that a scene at rest stays at rest.
@@ -310,9 +282,6 @@ impl DiscreteContacts {
             gaps: HashMap::default(),
             periodic: None,
             indentation_limit: 0.5,
-            pair_rates: default_pair_rates(),
-            intervals: HashMap::default(),
-            held: HashMap::default(),
             lubrication: None,
             generation: 0,
             neighbours: Default::default(),
@@ -388,20 +357,6 @@ impl DiscreteContacts {
     pub fn with_geometry_reuse(mut self, fraction: Real) -> Result<Self> {
         self.geometry_reuse = crate::contact::check_reuse(fraction)?;
         Ok(self)
-    }
-
-    /// Each live contact at its own rate (default `false`): the world's sub-step is set by the
-    /// pair that needs the shortest one, and every other live contact is evaluated only every
-    /// `k`-th sub-step (`k` a power of two, its own need met: `k` sub-steps within its share
-    /// of its Hertz contact time, of its own oscillation's half-period and of its tangential
-    /// spring's), keeping its last force in between. Pairs apart are checked on every
-    /// sub-step, so a first touch is found when it happens. The schedule restarts every step
-    /// (every pair is evaluated on a step's first sub-step), so checkpoints resume exactly.
-    /// Off by default: a contact's force held over its interval lets a body that a third body
-    /// drives in meanwhile overshoot its own contact (see `docs/performance.md`).
-    pub fn with_pair_rates(mut self, enabled: bool) -> Self {
-        self.pair_rates = enabled;
-        self
     }
 
     /// With another sub-stepping policy.
@@ -497,16 +452,15 @@ impl DiscreteContacts {
         let dt = world.integration_parameters.dt;
         check_positive("integration_parameters.dt", dt)?;
         let builds = self.neighbour_builds();
-        let (substeps, own) = self.substep_plan(world, hooks, dt)?;
-        self.pair_intervals(substeps, dt / substeps as Real, &own);
+        let substeps = self.substeps_with(world, hooks, dt)?;
         let saved =
             (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
         world.integration_parameters.dt = dt / substeps as Real;
         world.integration_parameters.num_solver_iterations = 1;
         let mut stats = StepStats { substeps, ..Default::default() };
         let mut result = Ok(());
-        for sub in 0..substeps {
-            let applied = match self.apply_forces(world, hooks, &mut stats, sub) {
+        for _ in 0..substeps {
+            let applied = match self.apply_forces(world, hooks, &mut stats) {
                 Ok(a) => a,
                 Err(e) => {
                     result = Err(e);

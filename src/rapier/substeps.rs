@@ -28,18 +28,16 @@ impl DiscreteContacts {
     /// still counts, so the advice never falls short); [`step_with_events`](Self::step_with_events)
     /// consults it.
     pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
-        self.substep_plan(world, &(), dt).map(|(n, _)| n)
+        self.substeps_with(world, &(), dt)
     }
 
-    /// [`substeps`](Self::substeps) with the user's hooks filtering the pairs, and each pair's
-    /// own longest sub-step (s): what its own contact needs.
-    pub(super) fn substep_plan(
+    /// [`substeps`](Self::substeps) with the user's hooks filtering the pairs.
+    pub(super) fn substeps_with(
         &self,
         world: &PhysicsWorld,
         hooks: &dyn PhysicsHooks,
         dt: Real,
-    ) -> Result<(usize, Vec<(ColliderPair, Real)>)> {
-        let mut own = Vec::new();
+    ) -> Result<usize> {
         // (largest sub-step, the contact time that sets it, the pair)
         let mut worst: Option<(Real, Real, String)> = None;
         let spring = self.tangential == TangentialLaw::Spring && !self.friction.is_none();
@@ -132,17 +130,15 @@ impl DiscreteContacts {
                     limit = (relaxation, relaxation);
                 }
             }
-            own.push(((ca, cb), limit.0));
             if worst.as_ref().is_none_or(|w| limit.0 < w.0) {
                 worst = Some((limit.0, limit.1, format!("colliders {ca:?} and {cb:?}")));
             }
         }
         let Some((recommended, contact_time, pair)) = worst else {
-            let n = match self.policy {
+            return Ok(match self.policy {
                 StepPolicy::Fixed { substeps } => substeps.max(1),
                 StepPolicy::AutoSubstep { .. } => 1,
-            };
-            return Ok((n, own));
+            });
         };
         let needed = (dt / recommended).ceil().max(1.0) as usize;
         let (allowed, chosen) = match self.policy {
@@ -158,39 +154,6 @@ impl DiscreteContacts {
                 pair,
             });
         }
-        Ok((chosen.max(needed), own))
-    }
-
-    /// Each live contact's sub-step interval for a step of `substeps` sub-steps of `h` seconds,
-    /// from the pairs' own longest sub-steps (`own`): the largest power of two `k <= substeps`
-    /// with `k h` within the pair's own need. A contact is evaluated on the sub-steps `j` with
-    /// `j % k == 0` and keeps its last force in between: a stiff contact that sets the world's
-    /// sub-step does not make every other contact run at its rate. Only intervals above one
-    /// are kept; none without [`with_pair_rates`](Self::with_pair_rates) or with lubrication
-    /// (the film's force follows the gap on every sub-step).
-    pub(super) fn pair_intervals(
-        &mut self,
-        substeps: usize,
-        h: Real,
-        own: &[(ColliderPair, Real)],
-    ) {
-        self.intervals.clear();
-        if !self.pair_rates || self.lubrication.is_some() {
-            return;
-        }
-        for &(pair, limit) in own {
-            // A first touch is found on the sub-step it happens: a pair apart is checked on
-            // every one (its speed may change within the step).
-            if !self.states.contains_key(&pair) {
-                continue;
-            }
-            let mut k = 1;
-            while 2 * k <= substeps && (2 * k) as Real * h <= limit {
-                k *= 2;
-            }
-            if k > 1 {
-                self.intervals.insert(pair, k);
-            }
-        }
+        Ok(chosen.max(needed))
     }
 }
