@@ -2,7 +2,6 @@
 //! torques summed in the candidates' order and put on the bodies; periodic wrapping.
 
 use super::*;
-use crate::lubrication::{film_radius, reduced_radius};
 
 impl DiscreteContacts {
     /// Moves every dynamic body of a handled bounded collider whose centre of mass left the
@@ -113,7 +112,7 @@ impl DiscreteContacts {
         let velocity = |k: &BodyKinematics| k.linvel + k.angvel.cross(x - k.center_of_mass);
         // `normal1` points out of A, towards B: closing when A moves along it faster than B.
         let closing = (velocity(a.2) - velocity(b.2)).dot(c.normal1);
-        let r_star = reduced_radius(film_radius(&ha.shape), film_radius(&hb.shape));
+        let r_star = ha.film_radius_with(hb);
         let f = lub.normal_force(c.dist, closing, r_star);
         if f == 0.0 || !f.is_finite() {
             return None;
@@ -222,10 +221,17 @@ impl DiscreteContacts {
         // Each body's sum runs in the candidates' order, whichever thread evaluated them.
         let mut alive = HashMap::with_capacity_and_hasher(self.states.len(), Default::default());
         let mut added: HashMap<RigidBodyHandle, (Vector, Vector)> = HashMap::default();
-        let mut add = |h: RigidBodyHandle, f: Vector, t: Vector| {
-            let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
-            e.0 += f;
-            e.1 += t;
+        // A pair's force on A (B takes minus it) and its torques on A and B, to its bodies.
+        let mut add = |bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
+                       f: Vector,
+                       torques: (Vector, Vector)| {
+            for (h, f, t) in [(bodies.0, f, torques.0), (bodies.1, -f, torques.1)] {
+                if let Some(h) = h {
+                    let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
+                    e.0 += f;
+                    e.1 += t;
+                }
+            }
         };
         let mut gaps = HashMap::with_capacity_and_hasher(self.gaps.len(), Default::default());
         for (e, &(ca, cb, _)) in evaluated.into_iter().zip(&pairs) {
@@ -234,12 +240,7 @@ impl DiscreteContacts {
                 gaps.insert((ca, cb), gap);
             }
             if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film {
-                if let Some(h) = bodies.0 {
-                    add(h, force_on_a, torque_on_a);
-                }
-                if let Some(h) = bodies.1 {
-                    add(h, -force_on_a, torque_on_b);
-                }
+                add(bodies, force_on_a, (torque_on_a, torque_on_b));
             }
             let Some(Evaluated { pair, bodies, out, state }) = contact else { continue };
             alive.insert(pair, state);
@@ -247,12 +248,7 @@ impl DiscreteContacts {
             stats.full_evaluations += usize::from(out.full);
             stats.max_indentation = stats.max_indentation.max(out.geometry.indentation);
             let f = out.force;
-            if let Some(h) = bodies.0 {
-                add(h, f.force_on_a, f.torque_on_a);
-            }
-            if let Some(h) = bodies.1 {
-                add(h, -f.force_on_a, f.torque_on_b);
-            }
+            add(bodies, f.force_on_a, (f.torque_on_a, f.torque_on_b));
         }
         self.states = alive;
         self.gaps = gaps;

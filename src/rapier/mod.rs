@@ -121,6 +121,15 @@ struct Handled {
     user_filter: bool,
 }
 
+impl Handled {
+    /// The reduced radius of curvature `R*` (m) the liquid film between this collider and
+    /// `other` acts with ([`film_radius`](crate::lubrication::film_radius) of each).
+    fn film_radius_with(&self, other: &Handled) -> Real {
+        use crate::lubrication::{film_radius, reduced_radius};
+        reduced_radius(film_radius(&self.shape), film_radius(&other.shape))
+    }
+}
+
 /// A collider's pose and its body's motion as a contact sees them: the body's kinematics, its
 /// handle, and its mass (infinite for a body that does not move, or no body at all).
 struct ColliderMotion {

@@ -121,10 +121,7 @@ impl DiscreteContacts {
             }
             // The film's damping `c` at its minimum gap: explicit steps resolve `m*/c`.
             if let Some(lub) = &self.lubrication {
-                let r_star = crate::lubrication::reduced_radius(
-                    crate::lubrication::film_radius(&ha.shape),
-                    crate::lubrication::film_radius(&hb.shape),
-                );
+                let r_star = ha.film_radius_with(hb);
                 let relaxation = m_star / lub.max_damping(r_star);
                 if relaxation.is_finite() && relaxation > 0.0 && relaxation < limit.0 {
                     limit = (relaxation, relaxation);
