@@ -9,7 +9,8 @@
 //! ```
 //! Options (defaults: Li 2010): `--dx 0.6,0.3` (mm), `--h0 5.5,19.6,35.7` (mm), `--radius 4.75`
 //! (mm), `--rho-p 7780`, `--rho-f 1230` (kg/m³), `--mu 0.0502` (Pa s), `--box 42,42,50` (mm),
-//! `--e-dry 0.97`, `--nc 16`, `--t-end 0.25` (s), `--dt-us` (fluid step; default keeps the
+//! `--e-dry 0.97`, `--youngs-scale 1` (both Young's moduli times this: a softer, longer
+//! contact), `--nc 16`, `--t-end 0.25` (s), `--dt-us` (fluid step; default keeps the
 //! paper's τ = 7.3), `--vtk-every-ms` (ParaView snapshots), `--no-compare` (skip the runs
 //! without contact), `--checkpoint-every N` (save each run every N steps to
 //! `target/validation/checkpoints/`) and `--resume` (go on from those files after a stop, with
@@ -18,10 +19,20 @@
 //! `hlbm::ForceMethod`), `--enlargement 0.143` (contact enlargement, in Δx), `--lubrication`
 //! (the liquid film's force below the gap the lattice resolves, see
 //! `discrete_contact::lubrication`) with `--film-cutoff 1.2` (in Δx) and
-//! `--film-min-gap-um 16` (roughness, µm).
+//! `--film-min-gap-um 16` (roughness, µm). `--nodes-per-d 10,16` sets the resolutions as
+//! lattice nodes across the diameter instead of `--dx`.
 //!
-//! Writes `target/validation/wet_rebound.csv` (`h0_mm,dx_mm,t_s,gap_mm`, with contact),
-//! `wet_rebound_no_contact.csv` (same columns), `wet_rebound_summary.csv` and
+//! `--st-sweep` runs e/e_dry against the Stokes number instead: nine experiments from St ≈ 3 to
+//! ≈ 900 in the Li box (the sphere's density, the liquid's viscosity and the release gap
+//! varied; [`SWEEP`]), each at every `--nodes-per-d` resolution (default 10 and 16 nodes
+//! across the diameter) with the contact enlargement Δx/7 and again with the liquid film
+//! instead (enlargement 0, cut-off `--film-cutoff`, minimum gap `--film-min-gap-um`), and
+//! writes `wet_rebound_st.csv` (the summary's columns) and `wet_rebound_st.png` beside Legendre
+//! et al.'s correlation.
+//!
+//! Writes `target/validation/wet_rebound.csv` (`h0_mm,dx_mm,rho_p_kg_m3,mu_pa_s,film,t_s,gap_mm,vz_m_s`,
+//! with contact), `wet_rebound_no_contact.csv` (same columns), `wet_rebound_summary.csv` (one
+//! row per run: impact, speeds, St, e/e_dry, Legendre's value, wall time) and
 //! `wet_rebound.png`.
 
 #[path = "common/mod.rs"]
@@ -30,15 +41,41 @@ mod common;
 use std::time::Instant;
 
 use discrete_contact::coupling::{ForceMethod, FILM_CUTOFF};
+use discrete_contact::material::Material;
 use discrete_contact::math::Vector;
 use discrete_contact_validation::wet_rebound::{ReboundRun, Trajectory, WetRebound};
 use plotters::prelude::*;
 
-/// One finished run.
-struct Run {
+/// One run's settings (lengths in mm) beyond the Li (2010) case.
+#[derive(Clone, Copy, Debug)]
+struct Job {
     h0: f64,
     dx: f64,
+    rho_p: f64,
+    mu: f64,
     contact: bool,
+    film: bool,
+}
+
+/// The Stokes-number sweep: (sphere density kg/m³, viscosity Pa s, release gap mm) in the Li
+/// box with Li's sphere radius and liquid density — glass, alumina, steel (Li's three gaps) and
+/// tungsten carbide, in liquids from 0.1 down to 0.0125 Pa s. The time step follows the
+/// spacing as in Li's case, so τ scales with the viscosity (≈ 2–15).
+const SWEEP: [(f64, f64, f64); 9] = [
+    (2500.0, 0.1, 19.6),
+    (2500.0, 0.0502, 19.6),
+    (4000.0, 0.0502, 19.6),
+    (7780.0, 0.0502, 5.5),
+    (7780.0, 0.0502, 19.6),
+    (7780.0, 0.0502, 35.7),
+    (15600.0, 0.0502, 35.7),
+    (15600.0, 0.025, 35.7),
+    (15600.0, 0.0125, 35.7),
+];
+
+/// One finished run.
+struct Run {
+    job: Job,
     case: WetRebound,
     traj: Trajectory,
 }
@@ -46,28 +83,43 @@ struct Run {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = common::Args::from_env(include_str!("wet_rebound.rs"));
     let quick = args.flag("--quick");
-    let dxs = args.list("--dx", if quick { &[1.0, 0.75] } else { &[0.6, 0.3] });
+    let sweep = args.flag("--st-sweep");
+    let radius_mm = args.number("--radius", 4.75);
+    let dxs = if sweep || args.value("--nodes-per-d").is_some() {
+        let nodes = args.list("--nodes-per-d", &[10.0, 16.0]);
+        nodes.iter().map(|n| 2.0 * radius_mm / n).collect()
+    } else {
+        args.list("--dx", if quick { &[1.0, 0.75] } else { &[0.6, 0.3] })
+    };
     let h0s = args.list("--h0", &[5.5, 19.6, 35.7]);
     let bx = args.list("--box", &[42.0, 42.0, 50.0]);
     let vtk_every = args
         .value("--vtk-every-ms")
         .map(|v| v.parse::<f64>().expect("--vtk-every-ms: a number") * 1e-3);
-    let case_for = |h0_mm: f64, dx_mm: f64, contact: bool| -> WetRebound {
-        let mut c = WetRebound::li_2010(h0_mm * 1e-3, dx_mm * 1e-3);
-        c.radius = args.number("--radius", 4.75) * 1e-3;
-        c.particle_density = args.number("--rho-p", c.particle_density);
+    let li = WetRebound::li_2010(h0s[0] * 1e-3, dxs[0] * 1e-3);
+    let case_for = |j: &Job| -> WetRebound {
+        let mut c = WetRebound::li_2010(j.h0 * 1e-3, j.dx * 1e-3);
+        c.radius = radius_mm * 1e-3;
+        c.particle_density = j.rho_p;
         c.fluid_density = args.number("--rho-f", c.fluid_density);
-        c.viscosity = args.number("--mu", c.viscosity);
+        c.viscosity = j.mu;
         c.box_size = Vector::new(bx[0], bx[1], bx[2]) * 1e-3;
         c.dry_restitution = args.number("--e-dry", c.dry_restitution);
         c.n_c = args.number("--nc", c.n_c as f64) as usize;
+        let soften = args.number("--youngs-scale", 1.0);
+        for m in [&mut c.sphere_material, &mut c.wall_material] {
+            *m = Material::new(m.youngs_modulus() * soften, m.poisson_ratio())
+                .expect("--youngs-scale: a positive factor");
+        }
         c.end_time = args.number("--t-end", c.end_time);
         if let Some(dt) = args.value("--dt-us") {
             c.dt = dt.parse::<f64>().expect("--dt-us: a number") * 1e-6;
         }
-        c.contact = contact;
-        c.enlargement = args.number("--enlargement", 1.0 / 7.0) * c.dx;
-        if args.flag("--lubrication") {
+        c.contact = j.contact;
+        let enlargement =
+            if sweep && j.film { 0.0 } else { args.number("--enlargement", 1.0 / 7.0) };
+        c.enlargement = enlargement * c.dx;
+        if j.film {
             c.film_cutoff = Some(args.number("--film-cutoff", FILM_CUTOFF) * c.dx);
             c.film_min_gap = args.number("--film-min-gap-um", c.film_min_gap * 1e6) * 1e-6;
         }
@@ -77,39 +129,56 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c
     };
 
-    let c0 = case_for(h0s[0], dxs[0], true);
+    let finest = dxs.iter().cloned().fold(f64::INFINITY, f64::min);
+    let mut jobs: Vec<Job> = Vec::new();
+    if sweep {
+        for &dx in &dxs {
+            for film in [false, true] {
+                for &(rho_p, mu, h0) in &SWEEP {
+                    jobs.push(Job { h0, dx, rho_p, mu, contact: true, film });
+                }
+            }
+        }
+    } else {
+        let rho_p = args.number("--rho-p", li.particle_density);
+        let mu = args.number("--mu", li.viscosity);
+        let film = args.flag("--lubrication");
+        for &dx in &dxs {
+            for &h0 in &h0s {
+                jobs.push(Job { h0, dx, rho_p, mu, contact: true, film });
+            }
+        }
+        if !args.flag("--no-compare") {
+            for &h0 in &h0s {
+                jobs.push(Job { h0, dx: finest, rho_p, mu, contact: false, film: false });
+            }
+        }
+    }
+    let c0 = case_for(&jobs[0]);
     println!(
-        "sphere R = {} mm, ρ_p = {} kg/m³ in ρ_f = {} kg/m³, μ = {} Pa s; box {:?} mm; e_dry = {}, N_c = {}",
+        "sphere R = {} mm in ρ_f = {} kg/m³; box {:?} mm; e_dry = {}, N_c = {}",
         c0.radius * 1e3,
-        c0.particle_density,
         c0.fluid_density,
-        c0.viscosity,
         bx,
         c0.dry_restitution,
         c0.n_c
     );
-    let finest = dxs.iter().cloned().fold(f64::INFINITY, f64::min);
-    let mut jobs: Vec<(f64, f64, bool)> = Vec::new();
-    for &dx in &dxs {
-        for &h0 in &h0s {
-            jobs.push((h0, dx, true));
-        }
-    }
-    if !args.flag("--no-compare") {
-        for &h0 in &h0s {
-            jobs.push((h0, finest, false));
-        }
-    }
 
     let dir = common::output_dir();
     let checkpoints = common::Checkpoints::from_args(&args, &dir);
     let mut runs = Vec::new();
-    for (h0, dx, contact) in jobs {
-        let case = case_for(h0, dx, contact);
+    for job in jobs {
+        let Job { h0, dx, rho_p, mu, contact, film } = job;
+        let case = case_for(&job);
         let settings = format!(
-            "h0 = {h0} mm, Δx = {dx} mm, Δt = {:.2} µs, {}",
+            "ρ_p = {rho_p} kg/m³, μ = {mu} Pa s, h0 = {h0} mm, Δx = {dx:.4} mm ({:.1} nodes across), Δt = {:.2} µs, {}",
+            2.0 * case.radius / case.dx,
             case.dt * 1e6,
-            if contact { "with contact" } else { "no contact" }
+            match (contact, film) {
+                (false, _) => "no contact",
+                (true, false) => "with contact",
+                (true, true) => "with contact and film",
+            }
         );
         println!("\n{settings}");
         let start = Instant::now();
@@ -117,8 +186,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut next_vtk = 0.0;
         let steps_max = (case.end_time / case.dt).ceil();
         let path = checkpoints.file(&format!(
-            "wet_rebound_h{h0}_dx{dx}_{}",
-            if contact { "contact" } else { "no_contact" }
+            "wet_rebound_h{h0}_dx{dx}_rho{rho_p}_mu{mu}_{}{}",
+            if contact { "contact" } else { "no_contact" },
+            if film { "_film" } else { "" }
         ));
         let mut run = if checkpoints.resumable(&path) {
             let run = ReboundRun::load(&path, &case)?;
@@ -163,30 +233,40 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let traj = run.finish();
         report(&case, &traj);
-        runs.push(Run { h0, dx, contact, case, traj });
+        runs.push(Run { job, case, traj });
     }
 
     // Gap over time, one row per 0.1 ms at least (every step is finer than 0.5 ms).
     for (contact, name) in [(true, "wet_rebound.csv"), (false, "wet_rebound_no_contact.csv")] {
         let mut rows = Vec::new();
-        for r in runs.iter().filter(|r| r.contact == contact) {
+        for r in runs.iter().filter(|r| r.job.contact == contact) {
+            let Job { h0, dx, rho_p, mu, film, .. } = r.job;
             let mut last = f64::NEG_INFINITY;
-            for &(t, gap, _) in &r.traj.samples {
+            for &(t, gap, vz) in &r.traj.samples {
                 if t - last >= 1e-4 - 1e-12 {
-                    rows.push(format!("{},{},{:.6},{:.5}", r.h0, r.dx, t, gap * 1e3));
+                    rows.push(format!(
+                        "{h0},{dx},{rho_p},{mu},{film},{t:.6},{:.5},{vz:.5}",
+                        gap * 1e3
+                    ));
                     last = t;
                 }
             }
         }
         if !rows.is_empty() {
-            common::write_csv(&dir.join(name), "h0_mm,dx_mm,t_s,gap_mm", &rows);
+            common::write_csv(
+                &dir.join(name),
+                "h0_mm,dx_mm,rho_p_kg_m3,mu_pa_s,film,t_s,gap_mm,vz_m_s",
+                &rows,
+            );
         }
     }
 
     // Restitution against the Stokes number, error against cost.
     println!("\nEffective restitution (speeds at a gap of 5 % of D) against Legendre et al. (2006), e/e_dry = exp(-35/St):");
     println!(
-        "{:>6} {:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>8} {:>8} {:>8} {:>8} {:>9}",
+        "{:>7} {:>7} {:>6} {:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>8} {:>8} {:>8} {:>8} {:>9}",
+        "rho_p",
+        "mu",
         "h0",
         "dx",
         "t_imp",
@@ -210,9 +290,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t_imp = r.traj.impact.map_or(f64::NAN, |i| i.0);
         let h_reb = r.traj.rebound_height.unwrap_or(0.0);
         println!(
-            "{:>6} {:>6} {:>9.4} {:>9.4} {:>9.4} {:>6.3} mm {:>7.1} {:>8.3} {:>8.3} {:>+8.3} {:>8.1} {:>9}",
-            r.h0,
-            r.dx,
+            "{:>7} {:>7} {:>6} {:>6.3} {:>9.4} {:>9.4} {:>9.4} {:>6.3} mm {:>7.1} {:>8.3} {:>8.3} {:>+8.3} {:>8.1} {:>9}",
+            r.job.rho_p,
+            r.job.mu,
+            r.job.h0,
+            r.job.dx,
             t_imp,
             u_in,
             u_out,
@@ -222,13 +304,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             legendre,
             ratio - legendre,
             r.traj.wall_time,
-            if r.contact { "yes" } else { "no" }
+            match (r.job.contact, r.job.film) {
+                (false, _) => "no",
+                (true, false) => "yes",
+                (true, true) => "film",
+            }
         );
         summary.push(format!(
-            "{},{},{},{:.6},{:.5},{:.5},{:.5},{:.2},{:.4},{:.4},{:.2},{},{}",
-            r.h0,
-            r.dx,
-            r.contact,
+            "{},{},{},{},{},{},{:.6},{:.5},{:.5},{:.5},{:.2},{:.4},{:.4},{:.2},{},{}",
+            r.job.h0,
+            r.job.dx,
+            r.job.rho_p,
+            r.job.mu,
+            r.job.contact,
+            r.job.film,
             t_imp,
             u_in,
             u_out,
@@ -242,12 +331,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ));
     }
     common::write_csv(
-        &dir.join("wet_rebound_summary.csv"),
-        "h0_mm,dx_mm,contact,t_impact_s,u_in_m_s,u_out_m_s,rebound_height_mm,stokes,e_over_e_dry,legendre,wall_time_s,steps,cells",
+        &dir.join(if sweep { "wet_rebound_st.csv" } else { "wet_rebound_summary.csv" }),
+        "h0_mm,dx_mm,rho_p_kg_m3,mu_pa_s,contact,film,t_impact_s,u_in_m_s,u_out_m_s,rebound_height_mm,stokes,e_over_e_dry,legendre,wall_time_s,steps,cells",
         &summary,
     );
-    plot(&dir.join("wet_rebound.png"), &runs, finest)?;
-    println!("\nwrote {}/wet_rebound.csv, wet_rebound_no_contact.csv, wet_rebound_summary.csv, wet_rebound.png", dir.display());
+    if sweep {
+        plot_st(&dir.join("wet_rebound_st.png"), &runs)?;
+        println!(
+            "\nwrote {}/wet_rebound.csv, wet_rebound_st.csv, wet_rebound_st.png",
+            dir.display()
+        );
+    } else {
+        plot(&dir.join("wet_rebound.png"), &runs, finest)?;
+        println!("\nwrote {}/wet_rebound.csv, wet_rebound_no_contact.csv, wet_rebound_summary.csv, wet_rebound.png", dir.display());
+    }
     Ok(())
 }
 
@@ -282,7 +379,7 @@ fn plot(
             root.fill(&WHITE)?;
             let t_max =
                 runs.iter().flat_map(|r| r.traj.samples.last()).map(|s| s.0).fold(0.0, f64::max);
-            let h_max = runs.iter().map(|r| r.h0).fold(0.0, f64::max) * 1.05;
+            let h_max = runs.iter().map(|r| r.job.h0).fold(0.0, f64::max) * 1.05;
             let mut ch = ChartBuilder::on(&root)
                 .caption("Sphere rebound in glycerol–water (Li 2010 setup)", ("sans-serif", 24))
                 .margin(14)
@@ -295,25 +392,25 @@ fn plot(
                 .label_style(("sans-serif", 15))
                 .draw()?;
             let colours = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK];
-            let mut h0s: Vec<f64> = runs.iter().map(|r| r.h0).collect();
+            let mut h0s: Vec<f64> = runs.iter().map(|r| r.job.h0).collect();
             h0s.dedup();
             for r in runs {
-                let k = h0s.iter().position(|&h| h == r.h0).unwrap_or(0);
+                let k = h0s.iter().position(|&h| h == r.job.h0).unwrap_or(0);
                 let colour = colours[k % colours.len()];
                 let pts: Vec<(f64, f64)> =
                     r.traj.samples.iter().map(|s| (s.0, s.1 * 1e3)).collect();
                 let label = format!(
                     "h0 = {} mm, Δx = {} mm{}",
-                    r.h0,
-                    r.dx,
-                    if r.contact { "" } else { ", no contact" }
+                    r.job.h0,
+                    r.job.dx,
+                    if r.job.contact { "" } else { ", no contact" }
                 );
-                let style = if r.contact && r.dx == finest {
+                let style = if r.job.contact && r.job.dx == finest {
                     colour.stroke_width(2)
                 } else {
                     colour.mix(0.5).stroke_width(1)
                 };
-                if r.contact {
+                if r.job.contact {
                     ch.draw_series(LineSeries::new(pts, style))?
                         .label(label)
                         .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
@@ -328,6 +425,78 @@ fn plot(
                 .border_style(BLACK)
                 .label_font(("sans-serif", 13))
                 .position(SeriesLabelPosition::UpperRight)
+                .draw()?;
+            root.present()?;
+            Ok(())
+        },
+    )
+}
+
+/// e/e_dry against the Stokes number, one series per resolution (the finest filled) and per film
+/// setting, beside Legendre et al.'s correlation (zero below St = 10: no rebound).
+fn plot_st(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::error::Error>> {
+    common::register_fonts();
+    discrete_contact::io::replace_atomically(
+        path,
+        |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
+            let root = BitMapBackend::new(tmp, (1000, 650)).into_drawing_area();
+            root.fill(&WHITE)?;
+            let mut ch = ChartBuilder::on(&root)
+                .caption("Wet restitution against the Stokes number", ("sans-serif", 24))
+                .margin(14)
+                .x_label_area_size(45)
+                .y_label_area_size(60)
+                .build_cartesian_2d((1.0..2000.0).log_scale(), 0.0..1.1)?;
+            ch.configure_mesh()
+                .x_desc("St = (ρ_p + ρ_f/2) U D / 9μ")
+                .y_desc("e / e_dry")
+                .label_style(("sans-serif", 15))
+                .draw()?;
+            let curve = (0..=330).map(|k| {
+                let st = 10f64.powf(k as f64 / 100.0);
+                (st, if st > 10.0 { (-35.0 / st).exp() } else { 0.0 })
+            });
+            ch.draw_series(LineSeries::new(curve, BLACK.stroke_width(2)))?
+                .label("Legendre et al. (2006), exp(−35/St)")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
+            let mut dxs: Vec<f64> = runs.iter().map(|r| r.job.dx).collect();
+            dxs.sort_by(f64::total_cmp);
+            dxs.dedup();
+            for (k, &dx) in dxs.iter().enumerate() {
+                for film in [false, true] {
+                    let colour = if film { BLUE } else { RED };
+                    // Finest (smallest Δx, first after sorting) filled.
+                    let filled = k == 0;
+                    let mut nodes = 0.0;
+                    let pts: Vec<(f64, f64)> = runs
+                        .iter()
+                        .filter(|r| r.job.dx == dx && r.job.film == film && r.job.contact)
+                        .filter_map(|r| {
+                            nodes = 2.0 * r.case.radius / r.case.dx;
+                            let (u_in, u_out) = r.traj.speeds_at(r.case.measuring_gap())?;
+                            let e = u_out / u_in / r.case.dry_restitution;
+                            Some((r.case.stokes_number(u_in), e))
+                                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                        })
+                        .collect();
+                    if pts.is_empty() {
+                        continue;
+                    }
+                    let style = if filled { colour.filled() } else { colour.stroke_width(2) };
+                    let label = format!(
+                        "D = {nodes:.0} Δx, {}",
+                        if film { "liquid film, no enlargement" } else { "enlargement Δx/7" }
+                    );
+                    ch.draw_series(pts.into_iter().map(move |p| Circle::new(p, 5, style)))?
+                        .label(label)
+                        .legend(move |(x, y)| Circle::new((x + 9, y), 5, style));
+                }
+            }
+            ch.configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .position(SeriesLabelPosition::UpperLeft)
                 .draw()?;
             root.present()?;
             Ok(())
