@@ -101,61 +101,54 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn plot(path: &std::path::Path, rows: &[Row]) -> Result<(), Box<dyn std::error::Error>> {
-    common::register_fonts();
-    discrete_contact::io::replace_atomically(
-        path,
-        |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
-            let root = BitMapBackend::new(tmp, (1400, 600)).into_drawing_area();
-            root.fill(&WHITE)?;
-            let panels = root.split_evenly((1, 2));
-            for (k, area) in panels.iter().enumerate() {
-                let (title, range) =
-                    if k == 0 { ("rebound speed v+/v", -0.6..1.5) } else { ("R ω+/v", -1.8..1.8) };
-                let mut ch = ChartBuilder::on(area)
-                    .caption(title, ("sans-serif", 22))
-                    .margin(12)
-                    .x_label_area_size(40)
-                    .y_label_area_size(55)
-                    .build_cartesian_2d(0.0..90.0, range)?;
-                ch.configure_mesh()
-                    .x_desc("impact angle θ (°)")
-                    .label_style(("sans-serif", 14))
-                    .draw()?;
-                let exact: Vec<(f64, f64)> = (1..900)
-                    .map(|i| i as f64 / 10.0)
-                    .map(|t| (t, if k == 0 { park(t).0 } else { park(t).1 }))
+    common::png(path, (1400, 600), |root| {
+        let panels = root.split_evenly((1, 2));
+        for (k, area) in panels.iter().enumerate() {
+            let (title, range) =
+                if k == 0 { ("rebound speed v+/v", -0.6..1.5) } else { ("R ω+/v", -1.8..1.8) };
+            let mut ch = ChartBuilder::on(area)
+                .caption(title, ("sans-serif", 22))
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(55)
+                .build_cartesian_2d(0.0..90.0, range)?;
+            ch.configure_mesh()
+                .x_desc("impact angle θ (°)")
+                .label_style(("sans-serif", 14))
+                .draw()?;
+            let exact: Vec<(f64, f64)> = (1..900)
+                .map(|i| i as f64 / 10.0)
+                .map(|t| (t, if k == 0 { park(t).0 } else { park(t).1 }))
+                .collect();
+            ch.draw_series(LineSeries::new(exact, BLACK.stroke_width(2)))?
+                .label("Park (2003)")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
+            for (mode, n, color) in [
+                (IntegrationMode::Count, 4, RED),
+                (IntegrationMode::Count, 16, MAGENTA),
+                (IntegrationMode::Subcell, 4, GREEN),
+                (IntegrationMode::Subcell, 8, BLUE),
+            ] {
+                let pts: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| r.mode == mode && r.n == n)
+                    .map(|r| (r.theta, if k == 0 { r.v } else { r.w }))
                     .collect();
-                ch.draw_series(LineSeries::new(exact, BLACK.stroke_width(2)))?
-                    .label("Park (2003)")
-                    .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
-                for (mode, n, color) in [
-                    (IntegrationMode::Count, 4, RED),
-                    (IntegrationMode::Count, 16, MAGENTA),
-                    (IntegrationMode::Subcell, 4, GREEN),
-                    (IntegrationMode::Subcell, 8, BLUE),
-                ] {
-                    let pts: Vec<(f64, f64)> = rows
-                        .iter()
-                        .filter(|r| r.mode == mode && r.n == n)
-                        .map(|r| (r.theta, if k == 0 { r.v } else { r.w }))
-                        .collect();
-                    ch.draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))?
-                        .label(format!("{} N_c={n}", mode.name()))
-                        .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
-                }
-                ch.configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK)
-                    .label_font(("sans-serif", 13))
-                    .position(if k == 0 {
-                        SeriesLabelPosition::UpperLeft
-                    } else {
-                        SeriesLabelPosition::LowerLeft
-                    })
-                    .draw()?;
+                ch.draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))?
+                    .label(format!("{} N_c={n}", mode.name()))
+                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
             }
-            root.present()?;
-            Ok(())
-        },
-    )
+            ch.configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .position(if k == 0 {
+                    SeriesLabelPosition::UpperLeft
+                } else {
+                    SeriesLabelPosition::LowerLeft
+                })
+                .draw()?;
+        }
+        Ok(())
+    })
 }

@@ -178,115 +178,107 @@ fn plot(
     runs: &[Run],
     summary: &[Summary],
 ) -> Result<(), Box<dyn std::error::Error>> {
-    common::register_fonts();
-    discrete_contact::io::replace_atomically(
-        path,
-        |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
-            let root = BitMapBackend::new(tmp, (1800, 1350)).into_drawing_area();
-            root.fill(&WHITE)?;
-            let (top, bottom) = root.split_vertically(820);
-            let panels = top.split_evenly((2, 4));
-            let shown = [
-                (IntegrationMode::Count, 4, RED),
-                (IntegrationMode::Count, 8, MAGENTA),
-                (IntegrationMode::Count, 16, BLUE),
-                (IntegrationMode::Subcell, 4, GREEN),
-                (IntegrationMode::Subcell, 8, BLACK),
-            ];
-            for (ci, (case, area)) in cases.iter().zip(panels.iter()).enumerate() {
-                let fmax = case.analytic_force(ds[ds.len() - 1]) * 1.15 / 1e3;
-                let mut ch = ChartBuilder::on(area)
-                    .caption(case.name(), ("sans-serif", 18))
-                    .margin(8)
-                    .x_label_area_size(32)
-                    .y_label_area_size(52)
-                    .build_cartesian_2d(0.0..ds[ds.len() - 1] * 1e3 * 1.02, 0.0..fmax)?;
-                ch.configure_mesh()
-                    .x_desc("d (mm)")
-                    .y_desc("F_n (kN)")
-                    .label_style(("sans-serif", 12))
-                    .draw()?;
-                let line: Vec<(f64, f64)> = (0..=100)
-                    .map(|i| ds[ds.len() - 1] * i as f64 / 100.0)
-                    .map(|d| (d * 1e3, case.analytic_force(d) / 1e3))
-                    .collect();
-                ch.draw_series(LineSeries::new(line, BLACK.stroke_width(2)))?
-                    .label("analytic")
-                    .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
-                for (mode, n, color) in shown {
-                    let r =
-                        runs.iter().find(|r| r.case == ci && r.mode == mode && r.n == n).unwrap();
-                    let pts = ds.iter().zip(&r.forces).map(|(d, f)| (d * 1e3, f / 1e3));
-                    let s = ch.draw_series(pts.map(|p| {
-                        if mode == IntegrationMode::Count {
-                            Cross::new(p, 4, color.stroke_width(1)).into_dyn()
-                        } else {
-                            Circle::new(p, 3, color.filled()).into_dyn()
-                        }
-                    }))?;
-                    if ci == 0 {
-                        s.label(format!("{} N_c={n}", mode.name()))
-                            .legend(move |(x, y)| Circle::new((x + 8, y), 3, color.filled()));
-                    }
-                }
-                if ci == 0 {
-                    ch.configure_series_labels()
-                        .background_style(WHITE.mix(0.8))
-                        .border_style(BLACK)
-                        .label_font(("sans-serif", 11))
-                        .position(SeriesLabelPosition::UpperLeft)
-                        .draw()?;
-                }
-            }
-            let (tmin, tmax) =
-                summary.iter().fold((f64::MAX, 0.0f64), |a, s| (a.0.min(s.4), a.1.max(s.4)));
-            let (emin, emax) = summary
-                .iter()
-                .fold((f64::MAX, 0.0f64), |a, s| (a.0.min(s.2.min(s.3)), a.1.max(s.2.max(s.3))));
-            let mut ch = ChartBuilder::on(&bottom)
-                .caption(
-                    "Mean RMS relative error against time per contact evaluation (8 cases)",
-                    ("sans-serif", 22),
-                )
-                .margin(20)
-                .x_label_area_size(45)
-                .y_label_area_size(70)
-                .build_cartesian_2d(
-                    (tmin * 0.7..tmax * 1.4).log_scale(),
-                    (emin * 0.5..emax * 2.0).log_scale(),
-                )?;
+    common::png(path, (1800, 1350), |root| {
+        let (top, bottom) = root.split_vertically(820);
+        let panels = top.split_evenly((2, 4));
+        let shown = [
+            (IntegrationMode::Count, 4, RED),
+            (IntegrationMode::Count, 8, MAGENTA),
+            (IntegrationMode::Count, 16, BLUE),
+            (IntegrationMode::Subcell, 4, GREEN),
+            (IntegrationMode::Subcell, 8, BLACK),
+        ];
+        for (ci, (case, area)) in cases.iter().zip(panels.iter()).enumerate() {
+            let fmax = case.analytic_force(ds[ds.len() - 1]) * 1.15 / 1e3;
+            let mut ch = ChartBuilder::on(area)
+                .caption(case.name(), ("sans-serif", 18))
+                .margin(8)
+                .x_label_area_size(32)
+                .y_label_area_size(52)
+                .build_cartesian_2d(0.0..ds[ds.len() - 1] * 1e3 * 1.02, 0.0..fmax)?;
             ch.configure_mesh()
-                .x_desc("time per evaluation (µs)")
-                .y_desc("RMS relative error")
-                .label_style(("sans-serif", 14))
+                .x_desc("d (mm)")
+                .y_desc("F_n (kN)")
+                .label_style(("sans-serif", 12))
                 .draw()?;
-            for (mode, color) in [(IntegrationMode::Count, RED), (IntegrationMode::Subcell, BLUE)] {
-                let pts: Vec<(f64, f64)> =
-                    summary.iter().filter(|s| s.0 == mode).map(|s| (s.4, s.2)).collect();
-                ch.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
-                    .label(format!("{} vs Hertz", mode.name()))
-                    .legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
-                ch.draw_series(pts.iter().zip(RESOLUTIONS).map(|(p, n)| {
-                    EmptyElement::at(*p)
-                        + Circle::new((0, 0), 4, color.filled())
-                        + Text::new(format!("N_c={n}"), (6, -14), ("sans-serif", 13))
+            let line: Vec<(f64, f64)> = (0..=100)
+                .map(|i| ds[ds.len() - 1] * i as f64 / 100.0)
+                .map(|d| (d * 1e3, case.analytic_force(d) / 1e3))
+                .collect();
+            ch.draw_series(LineSeries::new(line, BLACK.stroke_width(2)))?
+                .label("analytic")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
+            for (mode, n, color) in shown {
+                let r = runs.iter().find(|r| r.case == ci && r.mode == mode && r.n == n).unwrap();
+                let pts = ds.iter().zip(&r.forces).map(|(d, f)| (d * 1e3, f / 1e3));
+                let s = ch.draw_series(pts.map(|p| {
+                    if mode == IntegrationMode::Count {
+                        Cross::new(p, 4, color.stroke_width(1)).into_dyn()
+                    } else {
+                        Circle::new(p, 3, color.filled()).into_dyn()
+                    }
                 }))?;
-                let refpts: Vec<(f64, f64)> =
-                    summary.iter().filter(|s| s.0 == mode).map(|s| (s.4, s.3)).collect();
-                ch.draw_series(LineSeries::new(refpts, color.mix(0.5).stroke_width(1)))?
-                    .label(format!("{} discretisation error", mode.name()))
-                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.mix(0.5)));
+                if ci == 0 {
+                    s.label(format!("{} N_c={n}", mode.name()))
+                        .legend(move |(x, y)| Circle::new((x + 8, y), 3, color.filled()));
+                }
             }
-            ch.configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()?;
-            root.present()?;
-            Ok(())
-        },
-    )
+            if ci == 0 {
+                ch.configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .label_font(("sans-serif", 11))
+                    .position(SeriesLabelPosition::UpperLeft)
+                    .draw()?;
+            }
+        }
+        let (tmin, tmax) =
+            summary.iter().fold((f64::MAX, 0.0f64), |a, s| (a.0.min(s.4), a.1.max(s.4)));
+        let (emin, emax) = summary
+            .iter()
+            .fold((f64::MAX, 0.0f64), |a, s| (a.0.min(s.2.min(s.3)), a.1.max(s.2.max(s.3))));
+        let mut ch = ChartBuilder::on(&bottom)
+            .caption(
+                "Mean RMS relative error against time per contact evaluation (8 cases)",
+                ("sans-serif", 22),
+            )
+            .margin(20)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                (tmin * 0.7..tmax * 1.4).log_scale(),
+                (emin * 0.5..emax * 2.0).log_scale(),
+            )?;
+        ch.configure_mesh()
+            .x_desc("time per evaluation (µs)")
+            .y_desc("RMS relative error")
+            .label_style(("sans-serif", 14))
+            .draw()?;
+        for (mode, color) in [(IntegrationMode::Count, RED), (IntegrationMode::Subcell, BLUE)] {
+            let pts: Vec<(f64, f64)> =
+                summary.iter().filter(|s| s.0 == mode).map(|s| (s.4, s.2)).collect();
+            ch.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
+                .label(format!("{} vs Hertz", mode.name()))
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+            ch.draw_series(pts.iter().zip(RESOLUTIONS).map(|(p, n)| {
+                EmptyElement::at(*p)
+                    + Circle::new((0, 0), 4, color.filled())
+                    + Text::new(format!("N_c={n}"), (6, -14), ("sans-serif", 13))
+            }))?;
+            let refpts: Vec<(f64, f64)> =
+                summary.iter().filter(|s| s.0 == mode).map(|s| (s.4, s.3)).collect();
+            ch.draw_series(LineSeries::new(refpts, color.mix(0.5).stroke_width(1)))?
+                .label(format!("{} discretisation error", mode.name()))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.mix(0.5)));
+        }
+        ch.configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+        Ok(())
+    })
 }

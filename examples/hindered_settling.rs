@@ -446,105 +446,93 @@ fn perf_table(
 
 /// ⟨v⟩/v_s against φ with both correlations (Ar of the first run), with and without contacts.
 fn plot(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::error::Error>> {
-    common::register_fonts();
-    discrete_contact::io::replace_atomically(
-        path,
-        |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
-            let root = BitMapBackend::new(tmp, (1000, 700)).into_drawing_area();
-            root.fill(&WHITE)?;
-            let mut ch = ChartBuilder::on(&root)
-                .caption("Hindered settling in a triply periodic box", ("sans-serif", 24))
-                .margin(14)
-                .x_label_area_size(45)
-                .y_label_area_size(60)
-                .build_cartesian_2d(0.0..0.35, 0.0..1.0)?;
-            ch.configure_mesh()
-                .x_desc("φ")
-                .y_desc("⟨v⟩ / v_s")
-                .label_style(("sans-serif", 15))
-                .draw()?;
-            let mut ars: Vec<f64> = runs.iter().map(|r| r.case.archimedes).collect();
-            ars.sort_by(f64::total_cmp);
-            ars.dedup();
-            let colours = [RED, BLUE, GREEN];
-            for (k, &ar) in ars.iter().enumerate() {
-                let colour = colours[k % colours.len()];
-                let Some(any) = runs.iter().find(|r| r.case.archimedes == ar) else { continue };
-                let curve = |f: &dyn Fn(&HinderedSettling) -> f64| -> Vec<(f64, f64)> {
-                    (0..=35)
-                        .map(|i| {
-                            let mut c = any.case.clone();
-                            c.volume_fraction = i as f64 / 100.0;
-                            (c.volume_fraction, f(&c))
-                        })
-                        .collect()
-                };
-                let rz = colour.mix(0.6).stroke_width(1);
-                ch.draw_series(LineSeries::new(curve(&|c| c.richardson_zaki()), rz))?
-                    .label(format!("Richardson–Zaki, Ar = {ar}"))
-                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], rz));
-                ch.draw_series(DashedLineSeries::new(
-                    curve(&|c| c.garside_al_dibouni()),
-                    6,
-                    4,
-                    rz,
-                ))?
+    common::png(path, (1000, 700), |root| {
+        let mut ch = ChartBuilder::on(root)
+            .caption("Hindered settling in a triply periodic box", ("sans-serif", 24))
+            .margin(14)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..0.35, 0.0..1.0)?;
+        ch.configure_mesh()
+            .x_desc("φ")
+            .y_desc("⟨v⟩ / v_s")
+            .label_style(("sans-serif", 15))
+            .draw()?;
+        let mut ars: Vec<f64> = runs.iter().map(|r| r.case.archimedes).collect();
+        ars.sort_by(f64::total_cmp);
+        ars.dedup();
+        let colours = [RED, BLUE, GREEN];
+        for (k, &ar) in ars.iter().enumerate() {
+            let colour = colours[k % colours.len()];
+            let Some(any) = runs.iter().find(|r| r.case.archimedes == ar) else { continue };
+            let curve = |f: &dyn Fn(&HinderedSettling) -> f64| -> Vec<(f64, f64)> {
+                (0..=35)
+                    .map(|i| {
+                        let mut c = any.case.clone();
+                        c.volume_fraction = i as f64 / 100.0;
+                        (c.volume_fraction, f(&c))
+                    })
+                    .collect()
+            };
+            let rz = colour.mix(0.6).stroke_width(1);
+            ch.draw_series(LineSeries::new(curve(&|c| c.richardson_zaki()), rz))?
+                .label(format!("Richardson–Zaki, Ar = {ar}"))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], rz));
+            ch.draw_series(DashedLineSeries::new(curve(&|c| c.garside_al_dibouni()), 6, 4, rz))?
                 .label(format!("Garside–Al-Dibouni, Ar = {ar}"))
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], rz));
-                for (shape, contacts, label) in [
-                    (ParticleShape::Sphere, true, "spheres, contacts"),
-                    (ParticleShape::Sphere, false, "spheres, no contacts"),
-                    (ParticleShape::Cube, true, "cubes, contacts"),
-                ] {
-                    let pts: Vec<(f64, f64)> = runs
-                        .iter()
-                        .filter(|r| {
-                            r.case.archimedes == ar
-                                && r.case.shape == shape
-                                && r.case.contacts == contacts
-                        })
-                        .map(|r| (r.case.volume_fraction, r.result.v_mean_over_vs))
-                        .collect();
-                    if pts.is_empty() {
-                        continue;
-                    }
-                    let style = colour.filled();
-                    let label = format!("{label}, Ar = {ar}");
-                    match (shape, contacts) {
-                        (ParticleShape::Sphere, true) => {
-                            ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, style)))?
-                                .label(label)
-                                .legend(move |(x, y)| Circle::new((x + 9, y), 6, style));
-                        }
-                        (ParticleShape::Sphere, false) => {
-                            let s = colour.stroke_width(2);
-                            ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, s)))?
-                                .label(label)
-                                .legend(move |(x, y)| Circle::new((x + 9, y), 6, s));
-                        }
-                        (ParticleShape::Cube, _) => {
-                            ch.draw_series(pts.iter().map(|&p| {
-                                Rectangle::new(
-                                    [(p.0 - 0.004, p.1 - 0.012), (p.0 + 0.004, p.1 + 0.012)],
-                                    style,
-                                )
-                            }))?
+            for (shape, contacts, label) in [
+                (ParticleShape::Sphere, true, "spheres, contacts"),
+                (ParticleShape::Sphere, false, "spheres, no contacts"),
+                (ParticleShape::Cube, true, "cubes, contacts"),
+            ] {
+                let pts: Vec<(f64, f64)> = runs
+                    .iter()
+                    .filter(|r| {
+                        r.case.archimedes == ar
+                            && r.case.shape == shape
+                            && r.case.contacts == contacts
+                    })
+                    .map(|r| (r.case.volume_fraction, r.result.v_mean_over_vs))
+                    .collect();
+                if pts.is_empty() {
+                    continue;
+                }
+                let style = colour.filled();
+                let label = format!("{label}, Ar = {ar}");
+                match (shape, contacts) {
+                    (ParticleShape::Sphere, true) => {
+                        ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, style)))?
                             .label(label)
-                            .legend(move |(x, y)| {
-                                Rectangle::new([(x + 4, y - 5), (x + 14, y + 5)], style)
-                            });
-                        }
+                            .legend(move |(x, y)| Circle::new((x + 9, y), 6, style));
+                    }
+                    (ParticleShape::Sphere, false) => {
+                        let s = colour.stroke_width(2);
+                        ch.draw_series(pts.iter().map(|&p| Circle::new(p, 6, s)))?
+                            .label(label)
+                            .legend(move |(x, y)| Circle::new((x + 9, y), 6, s));
+                    }
+                    (ParticleShape::Cube, _) => {
+                        ch.draw_series(pts.iter().map(|&p| {
+                            Rectangle::new(
+                                [(p.0 - 0.004, p.1 - 0.012), (p.0 + 0.004, p.1 + 0.012)],
+                                style,
+                            )
+                        }))?
+                        .label(label)
+                        .legend(move |(x, y)| {
+                            Rectangle::new([(x + 4, y - 5), (x + 14, y + 5)], style)
+                        });
                     }
                 }
             }
-            ch.configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()?;
-            root.present()?;
-            Ok(())
-        },
-    )
+        }
+        ch.configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+        Ok(())
+    })
 }

@@ -371,135 +371,120 @@ fn plot(
     runs: &[Run],
     finest: f64,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    common::register_fonts();
-    discrete_contact::io::replace_atomically(
-        path,
-        |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
-            let root = BitMapBackend::new(tmp, (1100, 700)).into_drawing_area();
-            root.fill(&WHITE)?;
-            let t_max =
-                runs.iter().flat_map(|r| r.traj.samples.last()).map(|s| s.0).fold(0.0, f64::max);
-            let h_max = runs.iter().map(|r| r.job.h0).fold(0.0, f64::max) * 1.05;
-            let mut ch = ChartBuilder::on(&root)
-                .caption("Sphere rebound in glycerol–water (Li 2010 setup)", ("sans-serif", 24))
-                .margin(14)
-                .x_label_area_size(45)
-                .y_label_area_size(60)
-                .build_cartesian_2d(0.0..t_max, -1.0..h_max)?;
-            ch.configure_mesh()
-                .x_desc("t (s)")
-                .y_desc("gap h (mm)")
-                .label_style(("sans-serif", 15))
-                .draw()?;
-            let colours = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK];
-            let mut h0s: Vec<f64> = runs.iter().map(|r| r.job.h0).collect();
-            h0s.dedup();
-            for r in runs {
-                let k = h0s.iter().position(|&h| h == r.job.h0).unwrap_or(0);
-                let colour = colours[k % colours.len()];
-                let pts: Vec<(f64, f64)> =
-                    r.traj.samples.iter().map(|s| (s.0, s.1 * 1e3)).collect();
-                let label = format!(
-                    "h0 = {} mm, Δx = {} mm{}",
-                    r.job.h0,
-                    r.job.dx,
-                    if r.job.contact { "" } else { ", no contact" }
-                );
-                let style = if r.job.contact && r.job.dx == finest {
-                    colour.stroke_width(2)
-                } else {
-                    colour.mix(0.5).stroke_width(1)
-                };
-                if r.job.contact {
-                    ch.draw_series(LineSeries::new(pts, style))?
-                        .label(label)
-                        .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
-                } else {
-                    ch.draw_series(DashedLineSeries::new(pts, 6, 4, style))?
-                        .label(label)
-                        .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
-                }
+    common::png(path, (1100, 700), |root| {
+        let t_max =
+            runs.iter().flat_map(|r| r.traj.samples.last()).map(|s| s.0).fold(0.0, f64::max);
+        let h_max = runs.iter().map(|r| r.job.h0).fold(0.0, f64::max) * 1.05;
+        let mut ch = ChartBuilder::on(root)
+            .caption("Sphere rebound in glycerol–water (Li 2010 setup)", ("sans-serif", 24))
+            .margin(14)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..t_max, -1.0..h_max)?;
+        ch.configure_mesh()
+            .x_desc("t (s)")
+            .y_desc("gap h (mm)")
+            .label_style(("sans-serif", 15))
+            .draw()?;
+        let colours = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK];
+        let mut h0s: Vec<f64> = runs.iter().map(|r| r.job.h0).collect();
+        h0s.dedup();
+        for r in runs {
+            let k = h0s.iter().position(|&h| h == r.job.h0).unwrap_or(0);
+            let colour = colours[k % colours.len()];
+            let pts: Vec<(f64, f64)> = r.traj.samples.iter().map(|s| (s.0, s.1 * 1e3)).collect();
+            let label = format!(
+                "h0 = {} mm, Δx = {} mm{}",
+                r.job.h0,
+                r.job.dx,
+                if r.job.contact { "" } else { ", no contact" }
+            );
+            let style = if r.job.contact && r.job.dx == finest {
+                colour.stroke_width(2)
+            } else {
+                colour.mix(0.5).stroke_width(1)
+            };
+            if r.job.contact {
+                ch.draw_series(LineSeries::new(pts, style))?
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
+            } else {
+                ch.draw_series(DashedLineSeries::new(pts, 6, 4, style))?
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
             }
-            ch.configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()?;
-            root.present()?;
-            Ok(())
-        },
-    )
+        }
+        ch.configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+        Ok(())
+    })
 }
 
 /// e/e_dry against the Stokes number, one series per resolution (the finest filled) and per film
 /// setting, beside Legendre et al.'s correlation (zero below St = 10: no rebound).
 fn plot_st(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::error::Error>> {
-    common::register_fonts();
-    discrete_contact::io::replace_atomically(
-        path,
-        |tmp: &std::path::Path| -> Result<(), Box<dyn std::error::Error>> {
-            let root = BitMapBackend::new(tmp, (1000, 650)).into_drawing_area();
-            root.fill(&WHITE)?;
-            let mut ch = ChartBuilder::on(&root)
-                .caption("Wet restitution against the Stokes number", ("sans-serif", 24))
-                .margin(14)
-                .x_label_area_size(45)
-                .y_label_area_size(60)
-                .build_cartesian_2d((1.0..2000.0).log_scale(), 0.0..1.1)?;
-            ch.configure_mesh()
-                .x_desc("St = (ρ_p + ρ_f/2) U D / 9μ")
-                .y_desc("e / e_dry")
-                .label_style(("sans-serif", 15))
-                .draw()?;
-            let curve = (0..=330).map(|k| {
-                let st = 10f64.powf(k as f64 / 100.0);
-                (st, if st > 10.0 { (-35.0 / st).exp() } else { 0.0 })
-            });
-            ch.draw_series(LineSeries::new(curve, BLACK.stroke_width(2)))?
-                .label("Legendre et al. (2006), exp(−35/St)")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
-            let mut dxs: Vec<f64> = runs.iter().map(|r| r.job.dx).collect();
-            dxs.sort_by(f64::total_cmp);
-            dxs.dedup();
-            for (k, &dx) in dxs.iter().enumerate() {
-                for film in [false, true] {
-                    let colour = if film { BLUE } else { RED };
-                    // Finest (smallest Δx, first after sorting) filled.
-                    let filled = k == 0;
-                    let mut nodes = 0.0;
-                    let pts: Vec<(f64, f64)> = runs
-                        .iter()
-                        .filter(|r| r.job.dx == dx && r.job.film == film && r.job.contact)
-                        .filter_map(|r| {
-                            nodes = 2.0 * r.case.radius / r.case.dx;
-                            let (u_in, u_out) = r.traj.speeds_at(r.case.measuring_gap())?;
-                            let e = u_out / u_in / r.case.dry_restitution;
-                            Some((r.case.stokes_number(u_in), e))
-                                .filter(|p| p.0.is_finite() && p.1.is_finite())
-                        })
-                        .collect();
-                    if pts.is_empty() {
-                        continue;
-                    }
-                    let style = if filled { colour.filled() } else { colour.stroke_width(2) };
-                    let label = format!(
-                        "D = {nodes:.0} Δx, {}",
-                        if film { "liquid film, no enlargement" } else { "enlargement Δx/7" }
-                    );
-                    ch.draw_series(pts.into_iter().map(move |p| Circle::new(p, 5, style)))?
-                        .label(label)
-                        .legend(move |(x, y)| Circle::new((x + 9, y), 5, style));
+    common::png(path, (1000, 650), |root| {
+        let mut ch = ChartBuilder::on(root)
+            .caption("Wet restitution against the Stokes number", ("sans-serif", 24))
+            .margin(14)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d((1.0..2000.0).log_scale(), 0.0..1.1)?;
+        ch.configure_mesh()
+            .x_desc("St = (ρ_p + ρ_f/2) U D / 9μ")
+            .y_desc("e / e_dry")
+            .label_style(("sans-serif", 15))
+            .draw()?;
+        let curve = (0..=330).map(|k| {
+            let st = 10f64.powf(k as f64 / 100.0);
+            (st, if st > 10.0 { (-35.0 / st).exp() } else { 0.0 })
+        });
+        ch.draw_series(LineSeries::new(curve, BLACK.stroke_width(2)))?
+            .label("Legendre et al. (2006), exp(−35/St)")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
+        let mut dxs: Vec<f64> = runs.iter().map(|r| r.job.dx).collect();
+        dxs.sort_by(f64::total_cmp);
+        dxs.dedup();
+        for (k, &dx) in dxs.iter().enumerate() {
+            for film in [false, true] {
+                let colour = if film { BLUE } else { RED };
+                // Finest (smallest Δx, first after sorting) filled.
+                let filled = k == 0;
+                let mut nodes = 0.0;
+                let pts: Vec<(f64, f64)> = runs
+                    .iter()
+                    .filter(|r| r.job.dx == dx && r.job.film == film && r.job.contact)
+                    .filter_map(|r| {
+                        nodes = 2.0 * r.case.radius / r.case.dx;
+                        let (u_in, u_out) = r.traj.speeds_at(r.case.measuring_gap())?;
+                        let e = u_out / u_in / r.case.dry_restitution;
+                        Some((r.case.stokes_number(u_in), e))
+                            .filter(|p| p.0.is_finite() && p.1.is_finite())
+                    })
+                    .collect();
+                if pts.is_empty() {
+                    continue;
                 }
+                let style = if filled { colour.filled() } else { colour.stroke_width(2) };
+                let label = format!(
+                    "D = {nodes:.0} Δx, {}",
+                    if film { "liquid film, no enlargement" } else { "enlargement Δx/7" }
+                );
+                ch.draw_series(pts.into_iter().map(move |p| Circle::new(p, 5, style)))?
+                    .label(label)
+                    .legend(move |(x, y)| Circle::new((x + 9, y), 5, style));
             }
-            ch.configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .position(SeriesLabelPosition::UpperLeft)
-                .draw()?;
-            root.present()?;
-            Ok(())
-        },
-    )
+        }
+        ch.configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()?;
+        Ok(())
+    })
 }

@@ -87,6 +87,31 @@ pub fn register_fonts() {
         plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
 }
 
+/// A figure's drawing area: a PNG canvas of plotters' bitmap backend.
+pub type Canvas<'a> =
+    plotters::drawing::DrawingArea<plotters::prelude::BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// Draws a `size` (pixels) PNG at `path`: fonts registered, a white canvas handed to `draw`, and
+/// the file replaced atomically, so a reader never sees half a figure.
+pub fn png(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&Canvas) -> Result<(), Box<dyn std::error::Error>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    register_fonts();
+    discrete_contact::io::replace_atomically(
+        path,
+        |tmp: &Path| -> Result<(), Box<dyn std::error::Error>> {
+            let root = BitMapBackend::new(tmp, size).into_drawing_area();
+            root.fill(&WHITE)?;
+            draw(&root)?;
+            root.present()?;
+            Ok(())
+        },
+    )
+}
+
 /// Least-squares slope of `ln(err)` against `ln(n)`, negated: the experimental order of
 /// convergence.
 pub fn eoc(n: &[f64], err: &[f64]) -> f64 {
