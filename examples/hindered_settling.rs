@@ -15,7 +15,11 @@
 //! performance table), `--forcing-momentum` (the fluid's force on the particles as the EDM
 //! forcing's momentum instead of the link-wise momentum exchange; every run),
 //! `--closed-form-spheres` (sphere pairs' overlaps in closed form instead of on the grid),
-//! `--exact-polyhedra` (cube pairs' overlaps as the exact clipped polyhedron).
+//! `--exact-polyhedra` (cube pairs' overlaps as the exact clipped polyhedron); the contact's
+//! settings in every run: `--enlargement 0.2` (Δx, split over the pair), `--smoothing 0.5`
+//! (the `d_B` band's width, Δx), `--restitution 0.926`, `--friction-scale 1` (multiplies
+//! μ_s = 0.32 and μ_k = 0.16; 0 turns friction off), `--balance-fluid-only` (the balance force
+//! on the fluid outside the particles only, none through the particles' nodes).
 //!
 //! `--perf-table` times `--perf-steps` (default 600) steps at φ = 10, 20, 30 % with and
 //! without contacts in an 8 D and a 15 D box at the quick resolution (D = 6 Δx, E = 50 kPa):
@@ -323,6 +327,16 @@ fn seed_case(
     }
     c.closed_form_spheres = args.flag("--closed-form-spheres");
     c.exact_polyhedra = args.flag("--exact-polyhedra");
+    c.enlargement_cells = args.number("--enlargement", c.enlargement_cells);
+    c.smoothing_cells = args.number("--smoothing", c.smoothing_cells);
+    c.restitution = args.number("--restitution", c.restitution);
+    c.balance_on_fluid_only = args.flag("--balance-fluid-only");
+    let f = args.number("--friction-scale", 1.0);
+    c.friction = discrete_contact::Friction::new(
+        f * c.friction.static_coefficient,
+        f * c.friction.kinetic_coefficient,
+        c.friction.transition_speed,
+    )?;
     Ok(c)
 }
 

@@ -112,6 +112,13 @@ pub struct HinderedSettling {
     pub averaging_start: Real,
     /// Seed of the random placement.
     pub seed: u64,
+    /// Where the balance force acts. `false` (the default): on every lattice node, those
+    /// inside particles too, so each particle receives its share `ρ_f V a` through its nodes —
+    /// the mixture's pressure gradient of a closed column, `V (ρ_f + φ Δρ) g` upward in all.
+    /// `true`: on the fluid outside the particles only (`a / (1 − φ)`, the particles' share
+    /// taken off them again), so drag alone carries each particle's weight less its own
+    /// buoyancy — the other convention of periodic settling boxes.
+    pub balance_on_fluid_only: bool,
 }
 
 impl HinderedSettling {
@@ -145,6 +152,7 @@ impl HinderedSettling {
             duration: 200.0,
             averaging_start: 0.5,
             seed: 2,
+            balance_on_fluid_only: false,
         })
     }
 
@@ -473,7 +481,19 @@ impl SettlingRun {
         for &(_, c) in &particles {
             fluid.couple(&world, c)?;
         }
-        fluid.balance_weight(&world)?;
+        let a = fluid.balance_weight(&world)?;
+        if case.balance_on_fluid_only {
+            let v_particle = shape.mass_properties(1.0).mass();
+            let solid = particles.len() as Real * v_particle / case.box_length().powi(3);
+            let a = a / (1.0 - solid);
+            let units = *fluid.units();
+            fluid
+                .lattice_mut()
+                .set_body_acceleration(a.to_array().map(|c| units.acceleration_to_lattice(c)));
+            for &(b, _) in &particles {
+                world.bodies[b].add_force(-case.fluid_density * v_particle * a, true);
+            }
+        }
         let contacts = if case.contacts {
             let half = 0.5 * case.enlargement_cells * dx;
             let overlap = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?
