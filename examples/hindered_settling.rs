@@ -18,8 +18,10 @@
 //! `--exact-polyhedra` (cube pairs' overlaps as the exact clipped polyhedron); the contact's
 //! settings in every run: `--enlargement 0.2` (Δx, split over the pair), `--smoothing 0.5`
 //! (the `d_B` band's width, Δx), `--restitution 0.926`, `--friction-scale 1` (multiplies
-//! μ_s = 0.32 and μ_k = 0.16; 0 turns friction off), `--balance-fluid-only` (the balance force
-//! on the fluid outside the particles only, none through the particles' nodes).
+//! μ_s = 0.32 and μ_k = 0.16; 0 turns friction off), `--balance lattice|column|fluid` (where
+//! the balance force acts: every node, each particle receiving its nodes' share (default);
+//! each particle receiving exactly `ρ_f V a`, as from a closed column's pressure gradient; the
+//! fluid alone, as in the reference code's example).
 //!
 //! `--perf-table` times `--perf-steps` (default 600) steps at φ = 10, 20, 30 % with and
 //! without contacts in an 8 D and a 15 D box at the quick resolution (D = 6 Δx, E = 50 kPa):
@@ -45,7 +47,7 @@ use std::path::PathBuf;
 
 use discrete_contact::coupling::ForceMethod;
 use discrete_contact_validation::hindered_settling::{
-    HinderedSettling, ParticleShape, SettlingResult, SettlingRun,
+    Balance, HinderedSettling, ParticleShape, SettlingResult, SettlingRun,
 };
 use plotters::prelude::*;
 
@@ -107,7 +109,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let c0 = case_for(ParticleShape::Sphere, phis[0], ars[0], true)?;
     println!(
-        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, run {} D/U",
+        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, enlargement {} Δx, smoothing {} Δx, run {} D/U, balance {:?}",
         c0.diameter * 1e3,
         c0.nodes_per_diameter,
         c0.box_nodes,
@@ -119,7 +121,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c0.friction.kinetic_coefficient,
         c0.material.youngs_modulus(),
         c0.n_c,
-        c0.duration
+        c0.enlargement_cells,
+        c0.smoothing_cells,
+        c0.duration,
+        c0.balance
     );
 
     let checkpoints = common::Checkpoints::from_args(&args, &dir);
@@ -330,7 +335,12 @@ fn seed_case(
     c.enlargement_cells = args.number("--enlargement", c.enlargement_cells);
     c.smoothing_cells = args.number("--smoothing", c.smoothing_cells);
     c.restitution = args.number("--restitution", c.restitution);
-    c.balance_on_fluid_only = args.flag("--balance-fluid-only");
+    if let Some(name) = args.value("--balance") {
+        c.balance = Balance::named(name).ok_or(discrete_contact::Error::InvalidArgument {
+            name: "--balance",
+            allowed: "lattice, column or fluid",
+        })?;
+    }
     let f = args.number("--friction-scale", 1.0);
     c.friction = discrete_contact::Friction::new(
         f * c.friction.static_coefficient,

@@ -48,11 +48,54 @@ pub enum ParticleShape {
 }
 
 impl ParticleShape {
+    /// Volume of the points within `r` of the particle of volume-equivalent diameter `d`
+    /// (Steiner's formula: volume, surface area × r, mean-curvature integral × r², 4π r³/3).
+    pub fn covered_volume(self, d: Real, r: Real) -> Real {
+        let pi = std::f64::consts::PI;
+        let ball = 4.0 / 3.0 * pi * r.powi(3);
+        match self {
+            Self::Sphere => pi / 6.0 * (d + 2.0 * r).powi(3),
+            Self::Cube => {
+                let a = d * (pi / 6.0).cbrt();
+                a.powi(3) + 6.0 * a * a * r + 3.0 * pi * a * r * r + ball
+            }
+        }
+    }
+
     /// The name used in reports (`sphere`, `cube`).
     pub fn name(self) -> &'static str {
         match self {
             Self::Sphere => "sphere",
             Self::Cube => "cube",
+        }
+    }
+}
+
+/// Where the balance force — the uniform acceleration of the fluid that holds the suspension
+/// as a whole at rest in the periodic box — acts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Balance {
+    /// On every lattice node, those a particle covers too: each particle receives the body
+    /// force of its nodes, its smoothing band's included (about `ρ_f V_c a`, `V_c` the volume
+    /// within half the smoothing width outside its surface).
+    #[default]
+    Lattice,
+    /// As a closed column's mean pressure gradient: each particle receives exactly `ρ_f V a`,
+    /// so drag carries `(1 − φ)` of its submerged weight.
+    Column,
+    /// On the fluid outside the particles alone: drag carries each particle's whole submerged
+    /// weight (the convention of the reference code's example).
+    FluidAlone,
+}
+
+impl Balance {
+    /// The convention named `lattice`, `column` or `fluid`.
+    pub fn named(name: &str) -> Option<Self> {
+        match name {
+            "lattice" => Some(Self::Lattice),
+            "column" => Some(Self::Column),
+            "fluid" => Some(Self::FluidAlone),
+            _ => None,
         }
     }
 }
@@ -112,13 +155,9 @@ pub struct HinderedSettling {
     pub averaging_start: Real,
     /// Seed of the random placement.
     pub seed: u64,
-    /// Where the balance force acts. `false` (the default): on every lattice node, those
-    /// inside particles too, so each particle receives its share `ρ_f V a` through its nodes —
-    /// the mixture's pressure gradient of a closed column, `V (ρ_f + φ Δρ) g` upward in all.
-    /// `true`: on the fluid outside the particles only (`a / (1 − φ)`, the particles' share
-    /// taken off them again), so drag alone carries each particle's weight less its own
-    /// buoyancy — the other convention of periodic settling boxes.
-    pub balance_on_fluid_only: bool,
+    /// Where the balance force acts ([`Balance`]).
+    #[serde(default)]
+    pub balance: Balance,
 }
 
 impl HinderedSettling {
@@ -152,7 +191,7 @@ impl HinderedSettling {
             duration: 200.0,
             averaging_start: 0.5,
             seed: 2,
-            balance_on_fluid_only: false,
+            balance: Balance::default(),
         })
     }
 
@@ -482,16 +521,26 @@ impl SettlingRun {
             fluid.couple(&world, c)?;
         }
         let a = fluid.balance_weight(&world)?;
-        if case.balance_on_fluid_only {
-            let v_particle = shape.mass_properties(1.0).mass();
-            let solid = particles.len() as Real * v_particle / case.box_length().powi(3);
-            let a = a / (1.0 - solid);
+        let share = match case.balance {
+            Balance::Lattice => None,
+            Balance::Column => Some(1.0),
+            Balance::FluidAlone => Some(0.0),
+        };
+        if let Some(share) = share {
+            // Each particle receives the body force of every node it covers (`d_B > 0`: the
+            // points within half the smoothing width outside its surface), on average `ρ_f
+            // V_c a` with `V_c` that set's volume: take off all of it but `share ρ_f V a`, and
+            // raise `a` so that the total still balances the weight.
+            let v = shape.mass_properties(1.0).mass();
+            let covered = case.shape.covered_volume(case.diameter, 0.5 * case.smoothing_cells * dx);
+            let removed = covered - share * v;
+            let a = a / (1.0 - particles.len() as Real * removed / case.box_length().powi(3));
             let units = *fluid.units();
             fluid
                 .lattice_mut()
                 .set_body_acceleration(a.to_array().map(|c| units.acceleration_to_lattice(c)));
             for &(b, _) in &particles {
-                world.bodies[b].add_force(-case.fluid_density * v_particle * a, true);
+                world.bodies[b].add_force(-case.fluid_density * removed * a, true);
             }
         }
         let contacts = if case.contacts {
