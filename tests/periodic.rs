@@ -322,6 +322,16 @@ fn cubes_at_thirty_percent_are_placed_without_overlap() {
     assert!(closest > 0.25 * case.dx(), "closest pair {closest} m apart");
 }
 
+/// The reference code's reduced configuration: spheres at φ = 0.15, Ar = 1000, in an 8 D
+/// periodic box at 6 nodes per diameter, 200 D/U.
+fn reference_reduced_case() -> HinderedSettling {
+    let mut c = HinderedSettling::seed_002(ParticleShape::Sphere, 0.15, 1000.0).unwrap();
+    c.nodes_per_diameter = 6.0;
+    c.box_nodes = 48;
+    c.duration = 200.0;
+    c
+}
+
 /// Hindered settling at the reference code's reduced configuration — OpenLB's own
 /// `hinderedSettling3d` at φ = 0.15 in an 8 D periodic box at 6 nodes per diameter, its other
 /// defaults (τ = 0.55, Ar = 1000, ρ_p/ρ_f = 3.3, E = 5 kPa, e = 0.926, enlargement Δx/5),
@@ -331,10 +341,7 @@ fn cubes_at_thirty_percent_are_placed_without_overlap() {
 /// suspension's settling by a tenth fails.
 #[test]
 fn spheres_settle_as_the_reference_code_at_its_reduced_configuration() {
-    let mut c = HinderedSettling::seed_002(ParticleShape::Sphere, 0.15, 1000.0).unwrap();
-    c.nodes_per_diameter = 6.0;
-    c.box_nodes = 48;
-    c.duration = 200.0;
+    let c = reference_reduced_case();
     assert_eq!(
         (c.particle_count(), c.steps()),
         (147, 7776),
@@ -353,10 +360,7 @@ fn spheres_settle_as_the_reference_code_at_its_reduced_configuration() {
 /// conventions lie 1/(1 − φ) ≈ 1.18 apart), fails.
 #[test]
 fn spheres_settle_as_the_reference_code_with_its_balance_on_the_fluid_alone() {
-    let mut c = HinderedSettling::seed_002(ParticleShape::Sphere, 0.15, 1000.0).unwrap();
-    c.nodes_per_diameter = 6.0;
-    c.box_nodes = 48;
-    c.duration = 200.0;
+    let mut c = reference_reduced_case();
     c.balance = Balance::FluidAlone;
     let r = run(&c, |_| {}).unwrap();
     let v = r.v_mean_over_vs;

@@ -521,6 +521,7 @@ impl SettlingRun {
             fluid.couple(&world, c)?;
         }
         let a = fluid.balance_weight(&world)?;
+        let volume = shape.mass_properties(1.0).mass();
         let share = match case.balance {
             Balance::Lattice => None,
             Balance::Column => Some(1.0),
@@ -531,9 +532,8 @@ impl SettlingRun {
             // points within half the smoothing width outside its surface), on average `ρ_f
             // V_c a` with `V_c` that set's volume: take off all of it but `share ρ_f V a`, and
             // raise `a` so that the total still balances the weight.
-            let v = shape.mass_properties(1.0).mass();
             let covered = case.shape.covered_volume(case.diameter, 0.5 * case.smoothing_cells * dx);
-            let removed = covered - share * v;
+            let removed = covered - share * volume;
             let a = a / (1.0 - particles.len() as Real * removed / case.box_length().powi(3));
             let units = *fluid.units();
             fluid
@@ -575,7 +575,7 @@ impl SettlingRun {
         };
         Ok(Self {
             case: case.clone(),
-            volume: shape.mass_properties(1.0).mass(),
+            volume,
             world,
             fluid,
             contacts,
