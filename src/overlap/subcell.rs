@@ -1,5 +1,6 @@
 //! Sub-cell integration: the overlap's surface is located exactly on the cut edges of the grid
-//! and interpolated linearly between them, on the six tetrahedra of every cell it cuts.
+//! and interpolated linearly between them, on the six tetrahedra of every cell it cuts (a cut
+//! with four corners on the surface is split along its convex fold: the bodies are convex).
 //!
 //! Each tetrahedron is clipped by one body's surface and the pieces by the other's (which body
 //! first is decided by the geometry, see `Cutter::tet`). Where a clipped edge is a grid edge,
@@ -409,12 +410,26 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 let ([a, b], [c, d]) = ([neg[0], neg[1]], [pos[0], pos[1]]);
                 let (ac, ad) = (self.cut(s, &p[a], &p[c]), self.cut(s, &p[a], &p[d]));
                 let (bc, bd) = (self.cut(s, &p[b], &p[c]), self.cut(s, &p[b], &p[d]));
-                piece(self, &[p[a], ac, ad, bd]);
-                piece(self, &[p[a], ac, bc, bd]);
-                piece(self, &[p[a], p[b], bc, bd]);
                 let out = outward();
-                facet(self, &[ac, bc, bd], out);
-                facet(self, &[ac, bd, ad], out);
+                // The cut, the quadrilateral ac–bc–bd–ad, is split along the diagonal that
+                // folds it convexly (seen from inside): its four points lie on a convex
+                // body, and the concave fold lies inside the convex one by the whole fold.
+                // Along ac–bd unless ad lies outside the plane of (ac, bc, bd).
+                let n = (bc.x - ac.x).cross(bd.x - ac.x);
+                let n = if n.dot(out) < 0.0 { -n } else { n };
+                if n.dot(ad.x - ac.x) > 0.0 {
+                    piece(self, &[p[a], p[b], bc, bd]);
+                    piece(self, &[p[a], bc, bd, ad]);
+                    piece(self, &[p[a], ac, bc, ad]);
+                    facet(self, &[ac, bc, ad], out);
+                    facet(self, &[bc, bd, ad], out);
+                } else {
+                    piece(self, &[p[a], ac, ad, bd]);
+                    piece(self, &[p[a], ac, bc, bd]);
+                    piece(self, &[p[a], p[b], bc, bd]);
+                    facet(self, &[ac, bc, bd], out);
+                    facet(self, &[ac, bd, ad], out);
+                }
             }
         }
     }
