@@ -138,16 +138,15 @@ fn plot(path: &std::path::Path, rows: &[Row]) -> Result<(), Box<dyn std::error::
                     .label(format!("{} N_c={n}", mode.name()))
                     .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
             }
-            ch.configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .position(if k == 0 {
+            common::legend(
+                &mut ch,
+                if k == 0 {
                     SeriesLabelPosition::UpperLeft
                 } else {
                     SeriesLabelPosition::LowerLeft
-                })
-                .draw()?;
+                },
+                13,
+            )?;
         }
         Ok(())
     })

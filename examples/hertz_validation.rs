@@ -224,12 +224,7 @@ fn plot(
                 }
             }
             if ci == 0 {
-                ch.configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK)
-                    .label_font(("sans-serif", 11))
-                    .position(SeriesLabelPosition::UpperLeft)
-                    .draw()?;
+                common::legend(&mut ch, SeriesLabelPosition::UpperLeft, 11)?;
             }
         }
         let (tmin, tmax) =
@@ -273,12 +268,7 @@ fn plot(
                 .label(format!("{} discretisation error", mode.name()))
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.mix(0.5)));
         }
-        ch.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()?;
+        common::legend(&mut ch, SeriesLabelPosition::UpperRight, 14)?;
         Ok(())
     })
 }

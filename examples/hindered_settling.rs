@@ -34,7 +34,7 @@
 //! holds the whole lattice: ~150 bytes per node (375 MB at 135³).
 //!
 //! Writes `target/validation/hindered_settling.csv`
-//! (`shape,phi,ar,n_particles,v_mean_over_vs,richardson_zaki,garside_al_dibouni,with_contacts,wall_time_s,mlups`),
+//! (`shape,phi,ar,n_particles,v_mean_over_vs,richardson_zaki,garside_al_dibouni,with_contacts,balance,wall_time_s,mlups`),
 //! `hindered_settling_series.csv` (⟨v⟩/v_s over time), `hindered_settling.png`, and for the
 //! peer case `hindered_settling_peer.csv`.
 
@@ -109,7 +109,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let c0 = case_for(ParticleShape::Sphere, phis[0], ars[0], true)?;
     println!(
-        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, enlargement {} Δx, smoothing {} Δx, run {} D/U, balance {:?}",
+        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, enlargement {} Δx, smoothing {} Δx, run {} D/U, balance {}",
         c0.diameter * 1e3,
         c0.nodes_per_diameter,
         c0.box_nodes,
@@ -124,7 +124,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c0.enlargement_cells,
         c0.smoothing_cells,
         c0.duration,
-        c0.balance
+        c0.balance.name()
     );
 
     let checkpoints = common::Checkpoints::from_args(&args, &dir);
@@ -169,7 +169,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .map(|r| {
             format!(
-                "{},{},{},{},{:.4},{:.4},{:.4},{},{:.2},{:.2}",
+                "{},{},{},{},{:.4},{:.4},{:.4},{},{},{:.2},{:.2}",
                 r.case.shape.name(),
                 r.case.volume_fraction,
                 r.case.archimedes,
@@ -178,6 +178,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 r.case.richardson_zaki(),
                 r.case.garside_al_dibouni(),
                 r.case.contacts,
+                r.case.balance.name(),
                 r.result.wall_time,
                 r.result.mlups()
             )
@@ -185,7 +186,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     common::write_csv(
         &dir.join("hindered_settling.csv"),
-        "shape,phi,ar,n_particles,v_mean_over_vs,richardson_zaki,garside_al_dibouni,with_contacts,wall_time_s,mlups",
+        "shape,phi,ar,n_particles,v_mean_over_vs,richardson_zaki,garside_al_dibouni,with_contacts,balance,wall_time_s,mlups",
         &rows,
     );
     let series: Vec<String> = runs
@@ -193,11 +194,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .flat_map(|r| {
             r.result.samples.iter().map(move |(t, v)| {
                 format!(
-                    "{},{},{},{},{:.5},{:.4}",
+                    "{},{},{},{},{},{:.5},{:.4}",
                     r.case.shape.name(),
                     r.case.volume_fraction,
                     r.case.archimedes,
                     r.case.contacts,
+                    r.case.balance.name(),
                     t,
                     v
                 )
@@ -206,7 +208,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     common::write_csv(
         &dir.join("hindered_settling_series.csv"),
-        "shape,phi,ar,with_contacts,t_s,v_over_vs",
+        "shape,phi,ar,with_contacts,balance,t_s,v_over_vs",
         &series,
     );
 
@@ -551,12 +553,7 @@ fn plot(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::error::
                 }
             }
         }
-        ch.configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()?;
+        common::legend(&mut ch, SeriesLabelPosition::UpperRight, 13)?;
         Ok(())
     })
 }

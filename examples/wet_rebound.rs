@@ -414,12 +414,7 @@ fn plot(
                     .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
             }
         }
-        ch.configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()?;
+        common::legend(&mut ch, SeriesLabelPosition::UpperRight, 13)?;
         Ok(())
     })
 }
@@ -479,12 +474,7 @@ fn plot_st(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::erro
                     .legend(move |(x, y)| Circle::new((x + 9, y), 5, style));
             }
         }
-        ch.configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()?;
+        common::legend(&mut ch, SeriesLabelPosition::UpperLeft, 14)?;
         Ok(())
     })
 }

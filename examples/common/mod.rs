@@ -187,3 +187,20 @@ impl Args {
             .unwrap_or_else(|| default.to_vec())
     }
 }
+
+/// Draws `chart`'s legend at `position`: `size`-point labels in a bordered, light box.
+pub fn legend<'a, 'b: 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut plotters::chart::ChartContext<'a, plotters::prelude::BitMapBackend<'b>, CT>,
+    position: plotters::chart::SeriesLabelPosition,
+    size: u32,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", size))
+        .position(position)
+        .draw()?;
+    Ok(())
+}

@@ -91,11 +91,15 @@ pub enum Balance {
 impl Balance {
     /// The convention named `lattice`, `column` or `fluid`.
     pub fn named(name: &str) -> Option<Self> {
-        match name {
-            "lattice" => Some(Self::Lattice),
-            "column" => Some(Self::Column),
-            "fluid" => Some(Self::FluidAlone),
-            _ => None,
+        [Self::Lattice, Self::Column, Self::FluidAlone].into_iter().find(|b| b.name() == name)
+    }
+
+    /// The name used on the command line and in reports (`lattice`, `column`, `fluid`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Lattice => "lattice",
+            Self::Column => "column",
+            Self::FluidAlone => "fluid",
         }
     }
 }
