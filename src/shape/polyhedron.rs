@@ -19,6 +19,8 @@ pub struct PolyhedronSdf {
     edges: Vec<FaceEdge>,
     /// Where each face's edges begin in `edges`, and their end.
     edge_start: Vec<usize>,
+    /// The distinct vertices (for the test that a point of the surface is the nearest).
+    vertices: Vec<Vector>,
     pub(super) bounds: Aabb,
 }
 
@@ -148,7 +150,13 @@ impl PolyhedronSdf {
                 Some(*end)
             }))
             .collect();
-        Self { planes, faces, edges, edge_start, bounds }
+        let mut vertices: Vec<Vector> = Vec::new();
+        for v in faces.iter().flatten() {
+            if !vertices.contains(v) {
+                vertices.push(*v);
+            }
+        }
+        Self { planes, faces, edges, edge_start, vertices, bounds }
     }
 
     /// Distance and outward gradient.
@@ -157,8 +165,11 @@ impl PolyhedronSdf {
     /// cone at `q`. So a face whose plane sees `p` and into which `p` projects gives it: its
     /// projection. Failing that, `q` lies on an edge, and on one that `p` lies beyond as seen
     /// from a face whose plane sees it (of the edge's two faces, at least one sees `p`, and `p`
-    /// lies on the outer side of that face's side plane through the edge): only those edges'
-    /// segments are measured, and the farthest plane's face, the likeliest, is tried first.
+    /// lies on the outer side of that face's side plane through the edge). The farthest
+    /// plane's face, the likeliest, is tried first: the nearest point of its edges that `p`
+    /// lies beyond is the body's nearest point when the plane through it normal to `p − q`
+    /// has every vertex on its inner side (a supporting plane). Otherwise only the edges that
+    /// `p` lies beyond, as seen from faces that see it, are measured.
     pub(super) fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
         let (mut farthest, mut face) = (Real::NEG_INFINITY, 0);
         for (k, (n, off)) in self.planes.iter().enumerate() {
@@ -176,6 +187,27 @@ impl PolyhedronSdf {
         if !face_edges(face).iter().any(beyond) {
             return best;
         }
+        // The farthest plane's face: its nearest point, if no vertex lies beyond the plane
+        // through it normal to `p − q`.
+        let tiny = 1e-9 * (self.bounds.maxs - self.bounds.mins).max_element();
+        let mut near = (Real::INFINITY, Vector::ZERO);
+        for e in face_edges(face).iter().filter(|e| beyond(e)) {
+            let q = closest_on_segment(p, e.a, e.b);
+            let d = (p - q).length();
+            if d < near.0 {
+                near = (d, q);
+            }
+        }
+        let (d, q) = near;
+        if d > tiny {
+            let g = (p - q) / d;
+            // Round-off only: a vertex beyond the plane by this much could bring the body at
+            // most this much nearer.
+            let c = g.dot(q) + 1e-4 * tiny;
+            if self.vertices.iter().all(|v| g.dot(*v) <= c) {
+                return (d, g);
+            }
+        }
         let mut out = (Real::INFINITY, best.1);
         for (k, (n, off)) in self.planes.iter().enumerate() {
             let s = n.dot(p) - off;
@@ -191,14 +223,7 @@ impl PolyhedronSdf {
                 if d < out.0 {
                     // Within round-off of an edge, `p − q` has no direction: the face's normal
                     // is then as good a (sub)gradient there.
-                    out = (
-                        d,
-                        if d > 1e-9 * (self.bounds.maxs - self.bounds.mins).max_element() {
-                            (p - q) / d
-                        } else {
-                            *n
-                        },
-                    );
+                    out = (d, if d > tiny { (p - q) / d } else { *n });
                 }
             }
             if inside {
