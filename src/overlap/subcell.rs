@@ -1,6 +1,7 @@
 //! Sub-cell integration: the overlap's surface is located exactly on the cut edges of the grid
-//! and interpolated linearly between them, on the six tetrahedra of every cell it cuts (a cut
-//! with four corners on the surface is split along its convex fold: the bodies are convex).
+//! and interpolated linearly between them, on the six tetrahedra of every cell it cuts (where
+//! a surface leaves two corners of a tetrahedron on each side, its quadrilateral cut is split
+//! along the diagonal that folds it convexly: the bodies are convex).
 //!
 //! Each tetrahedron is clipped by one body's surface and the pieces by the other's (which body
 //! first is decided by the geometry, see `Cutter::tet`). Where a clipped edge is a grid edge,
