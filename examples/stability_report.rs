@@ -2,19 +2,22 @@
 //! mass ratios, grazing hit, thin plate, resting contact, a refused step, a box on a ramp and a
 //! ten-box pyramid with friction) in the rapier pipeline and prints one row per case: outcome, error, sub-steps, wall time.
 //!
-//! Then the precision table: the sphere–wall impacts with the body's state in f64 and rounded
-//! to f32 after every sub-step (what rapier3d, f32, would store), near the origin and 1 m and
-//! 10 m away.
+//! Then the precision table: the sphere–wall impacts in rapier3d-f64 and in rapier3d (f32),
+//! near the origin and 1 m and 10 m away.
 //!
 //! `cargo run --release --example stability_report -- resting` runs only the matrix cases whose
-//! description contains the given text (`-- precision`: only the precision table).
+//! description contains the given text (`-- precision`: only the precision table); `-- --f32`
+//! runs the matrix with the f32 drop-in (rapier3d) instead of the f64 one.
 
 use discrete_contact_validation::precision::{Ending, Impact};
 use discrete_contact_validation::stability::{Case, Verdict};
 use rayon::prelude::*;
 
 fn main() {
-    let filter = std::env::args().nth(1).unwrap_or_default();
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let f32 = args.iter().any(|a| a == "--f32");
+    let filter = args.into_iter().find(|a| a != "--f32").unwrap_or_default();
+    println!("drop-in: {}", if f32 { "rapier3d (f32)" } else { "rapier3d-f64" });
     let cases: Vec<Case> =
         Case::matrix().into_iter().filter(|c| c.describe().contains(&filter)).collect();
     println!("{:<58} {:<10} {:>10} {:>9} {:>9}", "case", "outcome", "error", "substeps", "wall s");
@@ -22,7 +25,7 @@ fn main() {
     let outcomes: Vec<_> = cases
         .par_iter()
         .map(|c| {
-            let o = c.run();
+            let o = c.run_in(f32);
             println!(
                 "{:<58} {:<10} {:>10.2e} {:>9} {:>9.2}",
                 c.describe(),
@@ -51,11 +54,12 @@ fn main() {
 
 /// Restitution error |e_meas/e - 1| with the state in f64 and in f32, per impact.
 fn precision_table() {
-    println!("\nPrecision (e = 0.85, one sub-step = t_H/40): |e_meas/e - 1| with the body's state in f64 / rounded to f32 each sub-step");
+    println!("\nPrecision (e = 0.85, one sub-step = t_H/40): |e_meas/e - 1| with rapier3d-f64 / rapier3d (f32)");
     println!("{:>8} {:>6} {:>9} {:>12} {:>12}", "E (Pa)", "v (m/s)", "offset (m)", "f64", "f32");
     let show = |r: discrete_contact::Result<Ending>| match r {
         Ok(Ending::Rebound(err)) => format!("{err:.2e}"),
         Ok(Ending::Stuck) => "stuck".into(),
+        Ok(Ending::Refused) => "refused".into(),
         Err(e) => format!("error: {e}"),
     };
     let rows: Vec<String> = Impact::cases()

@@ -81,6 +81,28 @@ pub enum Error {
         /// The largest indentation accepted (m).
         limit: Real,
     },
+    /// A contact whose approach the numbers that hold the bodies' coordinates cannot resolve:
+    /// in one sub-step it indents by less than
+    /// `PRECISION_SPACINGS` (the drop-in's constant) spacings of the
+    /// coordinates (f32 for `rapier3d`: 1.2e-7 m at 1 m from the origin), so the body would
+    /// stall or move in quanta.
+    #[error("contact between {pair} cannot be resolved in {precision} at {distance:e} m from the origin: one sub-step of {substep:e} s indents it by {indentation:e} m, under {required} times the spacing of its coordinates ({spacing:e} m); move the scene nearer the origin, use a softer material, or use the f64 build (rapier3d-f64, module `rapier`)")]
+    PrecisionTooLow {
+        /// Which pair, in words.
+        pair: String,
+        /// The numbers rapier holds the coordinates in (`f32` or `f64`).
+        precision: &'static str,
+        /// The largest coordinate of the pair's moving bodies (m).
+        distance: Real,
+        /// The sub-step (s).
+        substep: Real,
+        /// The pair's approach in one sub-step (m).
+        indentation: Real,
+        /// The spacing of the coordinates there (m).
+        spacing: Real,
+        /// The least indentation accepted, in spacings.
+        required: Real,
+    },
     /// A file could not be created, written, renamed or read.
     #[error("i/o error on `{path}`: {message}")]
     Io {

@@ -129,7 +129,11 @@ pub mod overlap;
 pub mod periodic;
 #[cfg(feature = "rapier")]
 pub mod rapier;
+#[cfg(feature = "rapier-f32")]
+pub mod rapier_f32;
 pub mod shape;
+#[cfg(any(feature = "rapier", feature = "rapier-f32"))]
+mod substep;
 pub mod tangential;
 
 /// The README's example, compiled and run as a doc test.
@@ -161,6 +165,10 @@ pub use parry3d_f64;
 /// The rapier version the drop-in works with (f64).
 #[cfg(feature = "rapier")]
 pub use rapier3d_f64;
+
+/// The rapier version the f32 drop-in works with.
+#[cfg(feature = "rapier-f32")]
+pub use rapier3d;
 
 /// The bundled homogenized lattice Boltzmann crate (feature `fluid`; a dry build never
 /// compiles it).

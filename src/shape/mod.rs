@@ -16,6 +16,8 @@ use crate::math::{Real, Vector};
 mod convex;
 mod custom;
 mod parry;
+#[cfg(feature = "rapier-f32")]
+pub use parry::widen_f32;
 mod polyhedron;
 
 pub use convex::ConvexShape;

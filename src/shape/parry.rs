@@ -1,8 +1,14 @@
-//! Parry shapes converted to [`ConvexShape`]s.
+//! Parry shapes converted to [`ConvexShape`]s, and (feature `rapier-f32`) f32 parry shapes
+//! widened to f64 ones.
 
 use std::sync::Arc;
 
+#[cfg(feature = "rapier-f32")]
+use parry3d_f64::shape::{Cuboid, RoundShape, SharedShape};
 use parry3d_f64::shape::{Shape, TypedShape};
+
+#[cfg(feature = "rapier-f32")]
+use crate::math::Real;
 
 use super::{ConvexShape, PolyhedronSdf};
 use crate::error::{Error, Result};
@@ -44,6 +50,69 @@ impl ConvexShape {
             )?,
             other => return Err(unsupported(&format!("{:?}", shape_type_name(&other)))),
         })
+    }
+}
+
+/// An f32 parry shape (`parry3d`, as `rapier3d` re-exports it) as the f64 parry shape it
+/// stands for (feature `rapier-f32`): every number widened exactly, a convex polyhedron as the
+/// convex hull of its widened vertices. The shapes [`ConvexShape::from_parry`] supports;
+/// others give [`Error::UnsupportedShape`]. The f32 drop-in computes its distances and its
+/// SDFs on these, in f64.
+#[cfg(feature = "rapier-f32")]
+pub fn widen_f32(shape: &dyn rapier3d::parry::shape::Shape) -> Result<SharedShape> {
+    use rapier3d::parry::shape::{ConvexPolyhedron, TypedShape as T32};
+    let hull = |p: &ConvexPolyhedron| {
+        let points: Vec<crate::math::Vector> = p.points().iter().map(|&v| v.into()).collect();
+        SharedShape::convex_hull(&points).ok_or(Error::UnsupportedShape {
+            shape: "ConvexPolyhedron".into(),
+            why: "its vertices widened to f64 do not span a volume",
+        })
+    };
+    let w = |x: f32| Real::from(x);
+    Ok(match shape.as_typed_shape() {
+        T32::Ball(b) => SharedShape::ball(w(b.radius)),
+        T32::Cuboid(c) => SharedShape::new(Cuboid::new(c.half_extents.into())),
+        T32::Cylinder(c) => SharedShape::cylinder(w(c.half_height), w(c.radius)),
+        T32::Cone(c) => SharedShape::cone(w(c.half_height), w(c.radius)),
+        T32::Capsule(c) => {
+            SharedShape::capsule(c.segment.a.into(), c.segment.b.into(), w(c.radius))
+        }
+        T32::ConvexPolyhedron(p) => hull(p)?,
+        T32::HalfSpace(h) => SharedShape::halfspace(h.normal.into()),
+        T32::RoundCuboid(r) => {
+            let e = r.inner_shape.half_extents;
+            SharedShape::round_cuboid(w(e.x), w(e.y), w(e.z), w(r.border_radius))
+        }
+        T32::RoundCylinder(r) => SharedShape::round_cylinder(
+            w(r.inner_shape.half_height),
+            w(r.inner_shape.radius),
+            w(r.border_radius),
+        ),
+        T32::RoundCone(r) => SharedShape::round_cone(
+            w(r.inner_shape.half_height),
+            w(r.inner_shape.radius),
+            w(r.border_radius),
+        ),
+        T32::RoundConvexPolyhedron(r) => {
+            let inner = hull(&r.inner_shape)?;
+            let inner = inner.as_convex_polyhedron().expect("a convex hull").clone();
+            SharedShape::new(RoundShape { inner_shape: inner, border_radius: w(r.border_radius) })
+        }
+        _ => {
+            return Err(Error::UnsupportedShape {
+                shape: format!("{:?}", shape.shape_type()),
+                why: "not a convex solid; decompose it into convex pieces (ConvexPolyhedron) or give a custom SDF",
+            })
+        }
+    })
+}
+
+impl ConvexShape {
+    /// Converts an f32 parry shape (`parry3d`, as `rapier3d` re-exports it; feature
+    /// `rapier-f32`): [`from_parry`](Self::from_parry) of its [`widen_f32`] twin.
+    #[cfg(feature = "rapier-f32")]
+    pub fn from_parry_f32(shape: &dyn rapier3d::parry::shape::Shape) -> Result<Self> {
+        Self::from_parry(widen_f32(shape)?.as_ref())
     }
 }
 

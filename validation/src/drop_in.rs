@@ -2,15 +2,14 @@
 //! floor and four cuboid walls on a fixed body) filled from above with a mix of spheres,
 //! cylinders, cubes and convex polyhedra, and a see-saw plank on a revolute joint in the middle
 //! of the floor. Nothing in it knows about the discrete contact: the same world runs with
-//! rapier's own contacts or with [`DiscreteContacts`].
-
-use discrete_contact::rapier3d_f64::prelude::*;
+//! rapier's own contacts or with the drop-in's `DiscreteContacts`.
+//!
+//! The scene and its run exist for both rapier builds: rapier3d-f64 (the items re-exported
+//! here) and rapier3d, f32 ([`mod@f32`]).
 
 use discrete_contact::error::Result;
-use discrete_contact::material::{Friction, Material};
+use discrete_contact::material::Material;
 use discrete_contact::math::{Real, Vector};
-use discrete_contact::overlap::{IntegrationMode, OverlapSettings};
-use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
 
 /// Size of the bodies (m): spheres of this radius; the other shapes have similar volume.
 pub const BODY_RADIUS: Real = 0.01;
@@ -27,41 +26,6 @@ pub const RESTITUTION: Real = 0.5;
 /// The bodies' material for the discrete contacts: a rubber, E = 5 MPa, ν = 0.4.
 pub fn rubber() -> Result<Material> {
     Material::new(5e6, 0.4)
-}
-
-/// The discrete contact the example and the benchmark add to the scene: sub-cell integration
-/// at `n_c`, restitution [`RESTITUTION`], friction μ_s = 0.5, μ_k = 0.4 (v_s = 1 cm/s),
-/// `substeps_per_contact` sub-steps per Hertz contact time, automatic sub-stepping. Hand it
-/// the colliders with `handle_all(&mut world, rubber()?)`.
-pub fn discrete_contacts(n_c: usize, substeps_per_contact: Real) -> Result<DiscreteContacts> {
-    discrete_contacts_with(
-        OverlapSettings::new(n_c, IntegrationMode::Subcell)?,
-        substeps_per_contact,
-    )
-}
-
-/// [`discrete_contacts`] with any overlap settings (the example's `--exact` adds the exact forms
-/// for sphere and polyhedron pairs).
-pub fn discrete_contacts_with(
-    overlap: OverlapSettings,
-    substeps_per_contact: Real,
-) -> Result<DiscreteContacts> {
-    Ok(DiscreteContacts::new(overlap, RESTITUTION)?
-        .with_friction(Friction::new(0.5, 0.4, 0.01)?)
-        .with_substeps_per_contact(substeps_per_contact)?
-        .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 }))
-}
-
-/// The scene and the handles a report needs.
-pub struct BinScene {
-    /// The world, with gravity, `dt = 1/240 s`.
-    pub world: PhysicsWorld,
-    /// The falling bodies.
-    pub bodies: Vec<RigidBodyHandle>,
-    /// The see-saw plank on its revolute joint.
-    pub plank: RigidBodyHandle,
-    /// Half-width of the bin's square floor (m).
-    pub half_width: Real,
 }
 
 /// A uniform sequence on [0, 1) from xorshift64 started at `seed`: portable and fixed, so a
@@ -86,83 +50,56 @@ pub fn rock_points(r: Real, random: &mut impl FnMut() -> Real) -> Vec<Vector> {
         .collect()
 }
 
-/// A bin with `n` falling bodies, columns of six by six per layer, shapes cycling through
-/// sphere, cylinder, cube and polyhedron, each slightly turned (deterministic).
-pub fn bin_scene(n: usize) -> BinScene {
-    let mut world = PhysicsWorld::new();
-    world.gravity = Vector::new(0.0, -9.81, 0.0);
-    world.integration_parameters.dt = 1.0 / 240.0;
-    let r = BODY_RADIUS;
-    let spacing = 2.7 * r;
-    let per_row = 6;
-    let half_width = 0.5 * spacing * per_row as Real + r;
-
-    // The bin: floor and four walls on one fixed body.
-    let bin = world.insert_body(RigidBodyBuilder::fixed());
-    let rapier_material =
-        |c: ColliderBuilder| c.friction(RAPIER_FRICTION).restitution(RAPIER_RESTITUTION);
-    world.insert_collider(
-        rapier_material(ColliderBuilder::new(SharedShape::halfspace(Vector::Y))),
-        Some(bin),
-    );
-    let (t, h) = (0.01, 0.3);
-    for (x, z, hx, hz) in [
-        (half_width + t, 0.0, t, half_width + 2.0 * t),
-        (-half_width - t, 0.0, t, half_width + 2.0 * t),
-        (0.0, half_width + t, half_width, t),
-        (0.0, -half_width - t, half_width, t),
-    ] {
-        world.insert_collider(
-            rapier_material(ColliderBuilder::cuboid(hx, h, hz)).translation(Vector::new(x, h, z)),
-            Some(bin),
-        );
-    }
-
-    // The see-saw: a plank hinged about z at its middle, above the floor.
-    let pivot = Vector::new(0.0, 0.025, 0.0);
-    let plank = world.insert_body(RigidBodyBuilder::dynamic().translation(pivot));
-    world.insert_collider(
-        rapier_material(ColliderBuilder::cuboid(0.6 * half_width, 0.004, 0.4 * half_width))
-            .density(DENSITY),
-        Some(plank),
-    );
-    let anchor = world.insert_body(RigidBodyBuilder::fixed().translation(pivot));
-    world.insert_impulse_joint(anchor, plank, RevoluteJointBuilder::new(Vector::Z));
-
-    // The falling bodies.
-    let mut bodies = Vec::with_capacity(n);
-    let mut random = xorshift(0x2545_f491_4f6c_dd1d);
-    for i in 0..n {
-        let (layer, k) = (i / (per_row * per_row), i % (per_row * per_row));
-        let x = -half_width + r + 0.5 * spacing + (k % per_row) as Real * spacing;
-        let z = -half_width + r + 0.5 * spacing + (k / per_row) as Real * spacing;
-        let y = 0.06 + layer as Real * spacing;
-        let turn = Vector::new(random() - 0.5, random() - 0.5, random() - 0.5) * 2.0;
-        let body = world.insert_body(
-            RigidBodyBuilder::dynamic()
-                .translation(Vector::new(
-                    x + 0.2 * r * (random() - 0.5),
-                    y,
-                    z + 0.2 * r * (random() - 0.5),
-                ))
-                .rotation(turn),
-        );
-        let collider = match i % 4 {
-            0 => ColliderBuilder::ball(r),
-            1 => ColliderBuilder::cylinder(0.8 * r, 0.9 * r),
-            2 => ColliderBuilder::cuboid(0.8 * r, 0.8 * r, 0.8 * r),
-            _ => {
-                let points = rock_points(r, &mut random);
-                ColliderBuilder::convex_hull(&points).unwrap_or_else(|| ColliderBuilder::ball(r))
-            }
-        };
-        world.insert_collider(rapier_material(collider).density(DENSITY), Some(body));
-        bodies.push(body);
-    }
-    BinScene { world, bodies, plank, half_width }
+/// What a run of the scene does: bodies, simulated time and the discrete contact's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    /// Falling bodies.
+    pub bodies: usize,
+    /// Simulated time (s).
+    pub seconds: Real,
+    /// Sub-steps per Hertz contact time.
+    pub per_contact: Real,
+    /// Sub-cell grid resolution `N_c`.
+    pub n_c: usize,
+    /// The exact forms where they exist (closed-form spheres, exact polyhedra).
+    pub exact: bool,
+    /// Geometry reuse fraction (0: every evaluation in full).
+    pub reuse: Real,
 }
 
-/// Kinetic energy (J) of the dynamic bodies, rotation included.
-pub fn kinetic_energy(world: &PhysicsWorld) -> Real {
-    world.bodies.iter().filter(|(_, rb)| rb.is_dynamic()).map(|(_, rb)| rb.kinetic_energy()).sum()
+/// What a run measured: rapier's own contacts and the discrete ones, and the discrete run's
+/// report rows (`t, KE, contacts, sub-steps per step, full evaluations per contact and step,
+/// largest overlap, wall time`, comma-separated).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Summary {
+    /// Kinetic energy at the end with rapier's own contacts (J).
+    pub rapier_ke: Real,
+    /// Largest penetration of rapier's own contacts (m).
+    pub rapier_penetration: Real,
+    /// Wall time with rapier's own contacts (s).
+    pub rapier_wall: Real,
+    /// Colliders handed to the discrete contact.
+    pub handled: usize,
+    /// Kinetic energy at the end with the discrete contacts (J).
+    pub ke: Real,
+    /// Largest overlap of the discrete contacts (m).
+    pub max_indentation: Real,
+    /// Sub-steps in all.
+    pub substeps: usize,
+    /// Contact evaluations in all, and of them full ones.
+    pub evaluations: (usize, usize),
+    /// Wall time with the discrete contacts (s).
+    pub wall: Real,
+    /// The discrete run's report rows.
+    pub rows: Vec<String>,
 }
+
+/// The scene in rapier3d-f64.
+mod in_f64;
+pub use in_f64::scene::*;
+
+/// The scene in rapier3d (f32): the same items as for rapier3d-f64.
+pub mod f32 {
+    pub use super::in_f32::scene::*;
+}
+mod in_f32;

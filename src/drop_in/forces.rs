@@ -18,18 +18,20 @@ impl DiscreteContacts {
         bodies.dedup();
         for h in bodies {
             let Some(rb) = world.bodies.get_mut(h) else { continue };
-            let shift = periodic.wrap_shift(rb.center_of_mass());
+            let shift = periodic.wrap_shift(vector(rb.center_of_mass()));
             if !rb.is_dynamic() || shift == Vector::ZERO {
                 continue;
             }
+            // Rapier's coordinate plus the shift, rounded once to rapier's numbers.
+            let moved_by = |x: engine::math::Vector| engine_vector(vector(x) + shift);
             let pose = *rb.position();
-            rb.set_translation(pose.translation + shift, false);
+            rb.set_translation(moved_by(pose.translation), false);
             // Rapier moves attached colliders at its next step; the fluid coupling reads them
             // before that.
             for &c in rb.colliders() {
                 if let Some(co) = world.colliders.get_mut(c) {
                     let mut p = *co.position();
-                    p.translation += shift;
+                    p.translation = moved_by(p.translation);
                     co.set_position(p);
                 }
             }
@@ -40,15 +42,15 @@ impl DiscreteContacts {
     /// without a body).
     pub(super) fn kinematics(world: &PhysicsWorld, c: ColliderHandle) -> ColliderMotion {
         let co = &world.colliders[c];
-        let pose = *co.position();
+        let pose = pose(co.position());
         match co.parent().and_then(|h| world.bodies.get(h).map(|rb| (h, rb))) {
             Some((h, rb)) => {
                 let k = BodyKinematics {
-                    center_of_mass: rb.center_of_mass(),
-                    linvel: rb.linvel(),
-                    angvel: rb.angvel(),
+                    center_of_mass: vector(rb.center_of_mass()),
+                    linvel: vector(rb.linvel()),
+                    angvel: vector(rb.angvel()),
                 };
-                let mass = if rb.is_dynamic() { rb.mass() } else { Real::INFINITY };
+                let mass = if rb.is_dynamic() { real(rb.mass()) } else { Real::INFINITY };
                 ColliderMotion { pose, kinematics: k, body: Some(h), mass }
             }
             None => ColliderMotion {
@@ -71,9 +73,9 @@ impl DiscreteContacts {
             return 0.0;
         }
         let props = &rb.mass_properties().local_mprops;
-        let i_min = props.principal_inertia().min_element();
+        let i_min = real(props.principal_inertia().min_element());
         let rotation = if r.is_finite() && i_min > 0.0 { r * r / i_min } else { 0.0 };
-        1.0 / rb.mass() + rotation
+        1.0 / real(rb.mass()) + rotation
     }
 
     /// The pair's effective mass against a tangential load at the contact, `1/Σ(1/m + r²/I_min)`
@@ -143,7 +145,7 @@ impl DiscreteContacts {
         world: &mut PhysicsWorld,
         hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
-    ) -> Result<Vec<(RigidBodyHandle, Vector, Vector)>> {
+    ) -> Result<Vec<Applied>> {
         let pairs = self.candidate_pairs(world, hooks)?;
         let eps = self.settings.enlargement();
         let this = &*self;
@@ -161,7 +163,7 @@ impl DiscreteContacts {
             // an evaluation's cost, and a pair found apart stays apart without one while the
             // bodies have moved less than its margin.
             let mut state = this.states.get(&(ca, cb)).copied();
-            let (sa, sb) = (w.colliders[ca].shape(), w.colliders[cb].shape());
+            let (sa, sb) = (this.queries[&ca].as_ref(), this.queries[&cb].as_ref());
             if state.is_none() {
                 if let Some(gap) = this.gaps.get(&(ca, cb)) {
                     if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) < gap.margin {
@@ -257,8 +259,8 @@ impl DiscreteContacts {
             if let Some(rb) = world.bodies.get_mut(h) {
                 if rb.is_dynamic() {
                     applied.push((h, rb.user_force(), rb.user_torque()));
-                    rb.add_force(f, true);
-                    rb.add_torque(t, true);
+                    rb.add_force(engine_vector(f), true);
+                    rb.add_torque(engine_vector(t), true);
                 }
             }
         }

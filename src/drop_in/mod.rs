@@ -1,43 +1,6 @@
-//! The drop-in for rapier scenes (feature `rapier`, on by default, f64 rapier).
-//!
-//! A user keeps their [`PhysicsWorld`] — bodies, colliders, joints, gravity, their own hooks
-//! and event handlers — and replaces `world.step()` by [`DiscreteContacts::step`]. For every
-//! pair of *handled* colliders that rapier's broad phase reports, rapier's own contact response
-//! is switched off (a physics hook returns `None`), and the discrete overlap-volume force is
-//! applied instead, with contact sub-steps: each sub-step is one rapier step of `dt / n` with
-//! one solver iteration, forces computed from the poses at its start (a leapfrog). Everything
-//! else rapier does — joints, gravity, contacts of unhandled pairs, events — keeps working,
-//! and rapier's pair rules hold for handled pairs too: collision and solver groups, active
-//! collision types, sensors, disabled colliders, joints with contacts disabled, and the user's
-//! `filter_contact_pair` hook on colliders that asked for it before they were handed over.
-//!
-//! **Small bodies**: rapier sizes its broad-phase margins by
-//! `integration_parameters.length_unit` (1 m by default). For millimetre bodies set it to their
-//! size — left at 1 m, 1934 settling 3 mm spheres were all paired with each other (1.9 million
-//! pairs, seconds per step); at 3 mm the step takes a millisecond.
-//!
-//! ```
-//! use discrete_contact::prelude::*;
-//! use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
-//! use rapier3d_f64::prelude::*;
-//! # use discrete_contact::math::Vector;
-//! let mut world = PhysicsWorld::new();
-//! let floor = world.insert_body(RigidBodyBuilder::fixed());
-//! world.insert_collider(ColliderBuilder::new(SharedShape::halfspace(Vector::Y)), Some(floor));
-//! let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.0105, 0.0)));
-//! world.insert_collider(ColliderBuilder::ball(0.01).density(7800.0), Some(ball));
-//! world.integration_parameters.dt = 1e-4;
-//!
-//! let steel = Material::new(2e11, 0.3)?;
-//! let mut contacts = DiscreteContacts::new(OverlapSettings::new(6, IntegrationMode::Subcell)?, 0.9)?
-//!     .with_policy(StepPolicy::AutoSubstep { max_substeps: 1000 });
-//! contacts.handle_all(&mut world, steel)?;        // every convex collider
-//! for _ in 0..100 {
-//!     contacts.step(&mut world)?;                 // instead of world.step()
-//! }
-//! assert!(world.bodies[ball].translation().y > 0.009); // resting on the floor, not through it
-//! # Ok::<(), discrete_contact::Error>(())
-//! ```
+//! The drop-in, written once for both rapier builds: its parent module (`rapier` for f64,
+//! `rapier_f32` for f32) names the rapier crate as `engine` and gives the conversions between
+//! rapier's numbers and the contact model's f64 in `boundary`.
 
 mod candidates;
 mod forces;
@@ -47,7 +10,9 @@ mod substeps;
 
 use hooks::Hooks;
 
-use rapier3d_f64::prelude::{
+use super::boundary::{engine_real, engine_vector, pose, real, vector};
+use super::{boundary, engine};
+use engine::prelude::{
     ActiveHooks, Collider, ColliderHandle, ContactModificationContext, EventHandler,
     PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodyType, SolverFlags,
 };
@@ -65,42 +30,17 @@ use crate::math::{Pose, Real, Vector};
 use crate::overlap::OverlapSettings;
 use crate::periodic::{PeriodicBox, Sphere};
 use crate::shape::{ConvexShape, Sdf};
+use crate::substep::coordinate_spacing;
+pub use crate::substep::{
+    StepPolicy, StepStats, AT_REST_SPEED, MIN_SUBSTEPS_PER_CONTACT, PRECISION_SPACINGS,
+    STABLE_SUBSTEPS_PER_HALF_PERIOD, SUBSTEPS_PER_CONTACT,
+};
 use crate::tangential::{stiffness_ratio, TangentialLaw};
 use neighbours::NeighbourList;
+use parry3d_f64::shape::SharedShape;
 
 /// The drop-in's maps, keyed by handles: a fixed-seed fast hash (see `Cargo.toml`).
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
-
-/// What to do when the user's step cannot resolve a contact.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
-pub enum StepPolicy {
-    /// Always this many sub-steps per step; refuse with [`Error::TimeStepTooLarge`] when a
-    /// contact needs more.
-    Fixed {
-        /// Sub-steps per step (>= 1).
-        substeps: usize,
-    },
-    /// As many sub-steps as the stiffest contact needs (by default [`SUBSTEPS_PER_CONTACT`] per
-    /// Hertz contact time), up to `max_substeps`; beyond that, refuse.
-    AutoSubstep {
-        /// Upper bound on sub-steps per step.
-        max_substeps: usize,
-    },
-}
-
-/// Sub-steps a contact gets within its Hertz contact time by default: restitution within about
-/// 1 % of `e`. [`DiscreteContacts::with_substeps_per_contact`] trades accuracy for speed.
-pub const SUBSTEPS_PER_CONTACT: Real = 30.0;
-
-/// The fewest sub-steps per Hertz contact time accepted: the explicit integration of the
-/// stiffest contact stays stable with a margin.
-pub const MIN_SUBSTEPS_PER_CONTACT: Real = 5.0;
-
-/// The fewest sub-steps per half-period of a live contact's own oscillation (normal, or the
-/// tangential spring's): `ω Δt <= π/2.5 ≈ 1.26`, a margin below the explicit integration's
-/// limit `ω Δt < 2`.
-pub const STABLE_SUBSTEPS_PER_HALF_PERIOD: Real = 2.5;
 
 /// A handled collider: its SDF and material.
 #[derive(Clone, Debug)]
@@ -183,31 +123,14 @@ fn moved(h: &Handled, from: &Pose, to: &Pose) -> Real {
     (to.translation - from.translation).length() + turn
 }
 
-/// What a step did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StepStats {
-    /// Sub-steps taken.
-    pub substeps: usize,
-    /// Contacts alive at the end of the step.
-    pub contacts: usize,
-    /// Largest indentation seen during the step (m).
-    pub max_indentation: Real,
-    /// Contact evaluations during the step (one per live contact per sub-step).
-    pub evaluations: usize,
-    /// Of these, the ones integrated in full (the rest updated their last full geometry, see
-    /// [`DiscreteContacts::with_geometry_reuse`]).
-    pub full_evaluations: usize,
-    /// Times the bounding-sphere neighbour list was rebuilt during the step (usually 0: it
-    /// lasts until some body may have moved half its skin, a tenth of the smallest bounding
-    /// radius).
-    pub neighbour_builds: usize,
-}
+/// A body's user force and torque before this crate added its own, in rapier's numbers.
+type Applied = (RigidBodyHandle, engine::math::Vector, engine::math::Vector);
 
 /// Rapier keeps user forces across steps: puts back each body's force and torque as they were
 /// before this crate added its own for one step (`applied` holds them, in the order they were
 /// recorded; restored in reverse). Restored, not subtracted: `f + g − g` is not always `f` in
 /// floating point, and the user's force must come back exactly.
-pub(crate) fn take_back(world: &mut PhysicsWorld, applied: &[(RigidBodyHandle, Vector, Vector)]) {
+pub(crate) fn take_back(world: &mut PhysicsWorld, applied: &[Applied]) {
     for &(h, f, t) in applied.iter().rev() {
         if let Some(rb) = world.bodies.get_mut(h) {
             rb.reset_forces(false);
@@ -231,6 +154,12 @@ pub struct DiscreteContacts {
     policy: StepPolicy,
     substeps_per_contact: Real,
     handled: HashMap<ColliderHandle, Handled>,
+    /// Each handled collider's shape as f64 parry sees it, for the pairs' exact distances:
+    /// rapier's own shape in the f64 build, its widened twin in the f32 one (whose own f32
+    /// distances can be off by more than the gap they decide on). Rebuilt from the world
+    /// where missing (after a restart).
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    queries: HashMap<ColliderHandle, SharedShape>,
     states: HashMap<(ColliderHandle, ColliderHandle), ContactState>,
     /// Candidate pairs found apart, kept while they stay candidates: a pair that cannot have
     /// closed its gap since needs no new distance (a cache; rebuilt by the exact distance).
@@ -287,6 +216,7 @@ impl DiscreteContacts {
             policy: StepPolicy::AutoSubstep { max_substeps: 10_000 },
             substeps_per_contact: SUBSTEPS_PER_CONTACT,
             handled: HashMap::default(),
+            queries: HashMap::default(),
             states: HashMap::default(),
             gaps: HashMap::default(),
             periodic: None,
@@ -398,7 +328,8 @@ impl DiscreteContacts {
             name: "collider",
             allowed: "a handle of a collider in this world",
         })?;
-        let shape = ConvexShape::from_parry(co.shape())?;
+        let query = boundary::query_shape(co)?;
+        let shape = ConvexShape::from_parry(query.as_ref())?;
         let (centre, radius) = shape.bounding_sphere();
         let b = shape.local_bounds();
         let half_size =
@@ -411,6 +342,7 @@ impl DiscreteContacts {
         co.set_active_hooks(co.active_hooks() | ActiveHooks::FILTER_CONTACT_PAIRS);
         self.handled
             .insert(collider, Handled { shape, material, centre, radius, half_size, user_filter });
+        self.queries.insert(collider, query);
         // A gap measured for another shape or size bounds nothing now, nor does a live
         // contact's last full geometry.
         self.gaps.clear();
@@ -428,12 +360,30 @@ impl DiscreteContacts {
         let all: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
         let mut n = 0;
         for h in all {
-            if ConvexShape::from_parry(world.colliders[h].shape()).is_ok() {
+            let query = boundary::query_shape(&world.colliders[h]);
+            if query.and_then(|q| ConvexShape::from_parry(q.as_ref())).is_ok() {
                 self.handle(world, h, material)?;
                 n += 1;
             }
         }
         Ok(n)
+    }
+
+    /// Builds the missing query shapes of handled colliders (all of them after a restart).
+    fn restore_queries(&mut self, world: &PhysicsWorld) -> Result<()> {
+        if self.queries.len() == self.handled.len() {
+            return Ok(());
+        }
+        for &c in self.handled.keys() {
+            if let std::collections::hash_map::Entry::Vacant(slot) = self.queries.entry(c) {
+                let co = world.colliders.get(c).ok_or(Error::InvalidArgument {
+                    name: "world",
+                    allowed: "the world whose colliders were handed to these contacts",
+                })?;
+                slot.insert(boundary::query_shape(co)?);
+            }
+        }
+        Ok(())
     }
 
     /// Whether the pair (in either order) is in contact now.
@@ -458,13 +408,14 @@ impl DiscreteContacts {
         hooks: &dyn PhysicsHooks,
         events: &dyn EventHandler,
     ) -> Result<StepStats> {
-        let dt = world.integration_parameters.dt;
+        let dt = real(world.integration_parameters.dt);
         check_positive("integration_parameters.dt", dt)?;
+        self.restore_queries(world)?;
         let builds = self.neighbour_builds();
         let substeps = self.substeps_with(world, hooks, dt)?;
         let saved =
             (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
-        world.integration_parameters.dt = dt / substeps as Real;
+        world.integration_parameters.dt = engine_real(dt / substeps as Real);
         world.integration_parameters.num_solver_iterations = 1;
         let mut stats = StepStats { substeps, ..Default::default() };
         let mut result = Ok(());

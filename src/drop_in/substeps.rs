@@ -27,8 +27,8 @@ impl DiscreteContacts {
     /// The user's `filter_contact_pair` hook is not consulted here (a pair it would exclude
     /// still counts, so the advice never falls short); [`step_with_events`](Self::step_with_events)
     /// consults it.
-    pub fn substeps(&self, world: &PhysicsWorld, dt: Real) -> Result<usize> {
-        self.substeps_with(world, &(), dt)
+    pub fn substeps(&self, world: &PhysicsWorld, dt: engine::math::Real) -> Result<usize> {
+        self.substeps_with(world, &(), real(dt))
     }
 
     /// [`substeps`](Self::substeps) with the user's hooks filtering the pairs.
@@ -40,6 +40,9 @@ impl DiscreteContacts {
     ) -> Result<usize> {
         // (largest sub-step, the contact time that sets it, the pair)
         let mut worst: Option<(Real, Real, String)> = None;
+        // The moving pair whose approach the coordinates resolve least: (approach speed over
+        // the coordinates' spacing, speed, largest coordinate, spacing, the pair).
+        let mut coarsest: Option<(Real, Real, Real, Real, String)> = None;
         let spring = self.tangential == TangentialLaw::Spring && !self.friction.is_none();
         let per_half_period = (MIN_SUBSTEPS_PER_CONTACT * self.substeps_per_contact
             / SUBSTEPS_PER_CONTACT)
@@ -66,7 +69,7 @@ impl DiscreteContacts {
                 }
             };
             let rims = rim(&ka, ha.radius) + rim(&kb, hb.radius);
-            let v0 = ((ka.linvel - kb.linvel).length() + rims).max(1e-3);
+            let v0 = ((ka.linvel - kb.linvel).length() + rims).max(AT_REST_SPEED);
             let t_h = hertz_contact_time(m_star, r_star, e_star, v0);
             // Hertz's deepest indentation, from the speed along the line from A to B (a body
             // sliding past another does not indent it); beyond the limit the bodies pass through.
@@ -79,11 +82,31 @@ impl DiscreteContacts {
                     (b + image - a).normalize_or_zero()
                 }
             };
-            let v_normal = if towards_b == Vector::ZERO {
-                v0
+            let approach = if towards_b == Vector::ZERO {
+                (ka.linvel - kb.linvel).length() + rims
             } else {
-                ((ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rims).max(1e-3)
+                (ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rims
             };
+            let v_normal = approach.max(AT_REST_SPEED);
+            // The coordinates of the bodies that move, in rapier's numbers.
+            let largest = [(pa.translation, ma), (pb.translation, mb)]
+                .iter()
+                .filter(|(_, m)| m.is_finite())
+                .map(|(x, _)| x.abs().max_element())
+                .fold(0.0, Real::max);
+            let spacing = coordinate_spacing(largest, boundary::EPSILON);
+            // The impact to resolve: a live contact's is the one it began with (it slows
+            // through every speed down to zero at its deepest), a pair apart's its approach now.
+            let impact = self.contact(ca, cb).map_or(approach, |s| s.reference_approach_speed);
+            if impact >= AT_REST_SPEED && coarsest.as_ref().is_none_or(|c| impact / spacing < c.0) {
+                coarsest = Some((
+                    impact / spacing,
+                    impact,
+                    largest,
+                    spacing,
+                    format!("colliders {ca:?} and {cb:?}"),
+                ));
+            }
             let depth = hertz_max_indentation(m_star, r_star, e_star, v_normal);
             let limit = self.indentation_limit * ha.half_size.min(hb.half_size);
             if depth > limit {
@@ -151,6 +174,21 @@ impl DiscreteContacts {
                 pair,
             });
         }
-        Ok(chosen.max(needed))
+        let substeps = chosen.max(needed);
+        let substep = dt / substeps as Real;
+        if let Some((_, speed, largest, spacing, pair)) = coarsest {
+            if speed * substep < PRECISION_SPACINGS * spacing {
+                return Err(Error::PrecisionTooLow {
+                    pair,
+                    precision: boundary::PRECISION,
+                    distance: largest,
+                    substep,
+                    indentation: speed * substep,
+                    spacing,
+                    required: PRECISION_SPACINGS,
+                });
+            }
+        }
+        Ok(substeps)
     }
 }

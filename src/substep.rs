@@ -1,0 +1,81 @@
+//! How the drop-in sub-steps a rapier step: the policy when a step cannot resolve a contact,
+//! the sub-step counts per contact time, and what a step did. Shared by the f64 and f32
+//! drop-ins (modules `rapier` and `rapier_f32`), which re-export these items.
+
+use crate::math::Real;
+
+/// What to do when the user's step cannot resolve a contact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+pub enum StepPolicy {
+    /// Always this many sub-steps per step; refuse with [`Error::TimeStepTooLarge`](crate::Error::TimeStepTooLarge) when a
+    /// contact needs more.
+    Fixed {
+        /// Sub-steps per step (>= 1).
+        substeps: usize,
+    },
+    /// As many sub-steps as the stiffest contact needs (by default [`SUBSTEPS_PER_CONTACT`] per
+    /// Hertz contact time), up to `max_substeps`; beyond that, refuse.
+    AutoSubstep {
+        /// Upper bound on sub-steps per step.
+        max_substeps: usize,
+    },
+}
+
+/// Sub-steps a contact gets within its Hertz contact time by default: restitution within about
+/// 1 % of `e`. `DiscreteContacts::with_substeps_per_contact` trades accuracy for speed.
+pub const SUBSTEPS_PER_CONTACT: Real = 30.0;
+
+/// The fewest sub-steps per Hertz contact time accepted: the explicit integration of the
+/// stiffest contact stays stable with a margin.
+pub const MIN_SUBSTEPS_PER_CONTACT: Real = 5.0;
+
+/// The fewest sub-steps per half-period of a live contact's own oscillation (normal, or the
+/// tangential spring's): `ω Δt <= π/2.5 ≈ 1.26`, a margin below the explicit integration's
+/// limit `ω Δt < 2`.
+pub const STABLE_SUBSTEPS_PER_HALF_PERIOD: Real = 2.5;
+
+/// The least indentation a resolved pair's approach may make in one sub-step, in spacings of
+/// the floating-point numbers that hold its bodies' coordinates. Below half a spacing the
+/// body's position does not change at all (`x + v Δt` rounds back to `x`): it stalls. At two,
+/// each sub-step's displacement is rounded by at most a quarter of itself, and the sphere–wall
+/// impacts of the precision table keep their restitution within 1.5 % of e. A step that
+/// cannot give every moving pair this is refused with
+/// [`Error::PrecisionTooLow`](crate::Error::PrecisionTooLow).
+pub const PRECISION_SPACINGS: Real = 2.0;
+
+/// The approach speed (m/s) below which the sub-step advice treats a pair as touching at rest
+/// (its Hertz time is taken at this speed), and the precision guard does not ask the pair's
+/// motion to be resolved: a body at rest may stand still in rounded coordinates.
+pub const AT_REST_SPEED: Real = 1e-3;
+
+/// The spacing (m) of floating-point numbers with relative spacing `epsilon` (the unit
+/// round-off's double, e.g. `f32::EPSILON`) around coordinates up to `largest` in magnitude:
+/// the distance from `largest` to the next number.
+pub(crate) fn coordinate_spacing(largest: Real, epsilon: Real) -> Real {
+    if largest > 0.0 && largest.is_finite() {
+        epsilon * largest.log2().floor().exp2()
+    } else {
+        0.0
+    }
+}
+
+/// What a step did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepStats {
+    /// Sub-steps taken.
+    pub substeps: usize,
+    /// Contacts alive at the end of the step.
+    pub contacts: usize,
+    /// Largest indentation seen during the step (m).
+    pub max_indentation: Real,
+    /// Contact evaluations during the step (one per live contact per sub-step).
+    pub evaluations: usize,
+    /// Of these, the ones integrated in full (the rest updated their last full geometry, see
+    /// `DiscreteContacts::with_geometry_reuse`).
+    pub full_evaluations: usize,
+    /// Times the bounding-sphere neighbour list was rebuilt during the step (usually 0: it
+    /// lasts until some body may have moved half its skin, a tenth of the smallest bounding
+    /// radius).
+    pub neighbour_builds: usize,
+}

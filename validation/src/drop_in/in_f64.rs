@@ -1,0 +1,6 @@
+use discrete_contact::rapier as drop_in;
+use discrete_contact::rapier3d_f64 as engine;
+// One source for both rapier builds, compiled once per build on purpose.
+#[allow(clippy::duplicate_mod)]
+#[path = "scene.rs"]
+pub(super) mod scene;
