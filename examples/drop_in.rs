@@ -1,7 +1,7 @@
 //! The drop-in: an ordinary rapier scene — a bin filled with a few hundred spheres, cylinders,
 //! cubes and convex polyhedra falling onto a see-saw plank on a revolute joint — run twice:
 //! with rapier's own contacts, and with the discrete overlap-volume contact added by the few
-//! lines marked below. Prints kinetic energy, largest overlap and wall time as the pile
+//! lines marked in the validation crate's `drop_in::run`. Prints kinetic energy, largest overlap and wall time as the pile
 //! settles, and writes `target/validation/drop_in.csv`.
 //!
 //! `cargo run --release --example drop_in [-- --bodies 180 --seconds 1.0 --nc 4 --per-contact 6 --reuse 0.25]`

@@ -328,8 +328,27 @@ impl DiscreteContacts {
             name: "collider",
             allowed: "a handle of a collider in this world",
         })?;
+        let shapes = Self::shapes_of(co)?;
+        self.hand_over(co, collider, material, shapes);
+        Ok(())
+    }
+
+    /// A collider's shape as f64 parry sees it and as the contact's SDF; an error for a shape
+    /// that is not a convex solid.
+    fn shapes_of(co: &Collider) -> Result<(SharedShape, ConvexShape)> {
         let query = boundary::query_shape(co)?;
         let shape = ConvexShape::from_parry(query.as_ref())?;
+        Ok((query, shape))
+    }
+
+    /// Records collider `collider` (`co`) as handled with `material` and its `shapes`.
+    fn hand_over(
+        &mut self,
+        co: &mut Collider,
+        collider: ColliderHandle,
+        material: Material,
+        (query, shape): (SharedShape, ConvexShape),
+    ) {
         let (centre, radius) = shape.bounding_sphere();
         let b = shape.local_bounds();
         let half_size =
@@ -352,7 +371,6 @@ impl DiscreteContacts {
             state.reference = None;
         }
         self.generation += 1;
-        Ok(())
     }
 
     /// Hands every collider with a convex shape to the discrete contact; returns how many.
@@ -360,9 +378,9 @@ impl DiscreteContacts {
         let all: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
         let mut n = 0;
         for h in all {
-            let query = boundary::query_shape(&world.colliders[h]);
-            if query.and_then(|q| ConvexShape::from_parry(q.as_ref())).is_ok() {
-                self.handle(world, h, material)?;
+            let co = &mut world.colliders[h];
+            if let Ok(shapes) = Self::shapes_of(co) {
+                self.hand_over(co, h, material, shapes);
                 n += 1;
             }
         }

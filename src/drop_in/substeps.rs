@@ -88,7 +88,8 @@ impl DiscreteContacts {
                 (ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rims
             };
             let v_normal = approach.max(AT_REST_SPEED);
-            // The coordinates of the bodies that move, in rapier's numbers.
+            // The largest coordinate of the bodies that move, whose spacing in rapier's numbers
+            // bounds what a sub-step can resolve.
             let largest = [(pa.translation, ma), (pb.translation, mb)]
                 .iter()
                 .filter(|(_, m)| m.is_finite())

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 #[cfg(feature = "rapier-f32")]
-use parry3d_f64::shape::{Cuboid, RoundShape, SharedShape};
+use parry3d_f64::shape::{ConvexPolyhedron as ConvexPolyhedron64, Cuboid, RoundShape, SharedShape};
 use parry3d_f64::shape::{Shape, TypedShape};
 
 #[cfg(feature = "rapier-f32")]
@@ -17,12 +17,6 @@ impl ConvexShape {
     /// Converts a parry shape. Supported: Ball, Cuboid, Cylinder, Cone, Capsule,
     /// ConvexPolyhedron, their `Round*` variants and HalfSpace.
     pub fn from_parry(shape: &dyn Shape) -> Result<Self> {
-        let unsupported = |name: &str| {
-            Error::UnsupportedShape {
-            shape: name.to_string(),
-            why: "not a convex solid; decompose it into convex pieces (ConvexPolyhedron) or give a custom SDF",
-        }
-        };
         Ok(match shape.as_typed_shape() {
             TypedShape::Ball(b) => Self::ball(b.radius)?,
             TypedShape::Cuboid(c) => Self::cuboid(c.half_extents)?,
@@ -48,7 +42,7 @@ impl ConvexShape {
                 Self::Polyhedron(Arc::new(PolyhedronSdf::from_parry(&r.inner_shape))),
                 r.border_radius,
             )?,
-            other => return Err(unsupported(&format!("{:?}", shape_type_name(&other)))),
+            other => return Err(not_convex(format!("{:?}", shape_type_name(&other)))),
         })
     }
 }
@@ -63,7 +57,7 @@ pub fn widen_f32(shape: &dyn rapier3d::parry::shape::Shape) -> Result<SharedShap
     use rapier3d::parry::shape::{ConvexPolyhedron, TypedShape as T32};
     let hull = |p: &ConvexPolyhedron| {
         let points: Vec<crate::math::Vector> = p.points().iter().map(|&v| v.into()).collect();
-        SharedShape::convex_hull(&points).ok_or(Error::UnsupportedShape {
+        ConvexPolyhedron64::from_convex_hull(&points).ok_or(Error::UnsupportedShape {
             shape: "ConvexPolyhedron".into(),
             why: "its vertices widened to f64 do not span a volume",
         })
@@ -77,7 +71,7 @@ pub fn widen_f32(shape: &dyn rapier3d::parry::shape::Shape) -> Result<SharedShap
         T32::Capsule(c) => {
             SharedShape::capsule(c.segment.a.into(), c.segment.b.into(), w(c.radius))
         }
-        T32::ConvexPolyhedron(p) => hull(p)?,
+        T32::ConvexPolyhedron(p) => SharedShape::new(hull(p)?),
         T32::HalfSpace(h) => SharedShape::halfspace(h.normal.into()),
         T32::RoundCuboid(r) => {
             let e = r.inner_shape.half_extents;
@@ -93,17 +87,11 @@ pub fn widen_f32(shape: &dyn rapier3d::parry::shape::Shape) -> Result<SharedShap
             w(r.inner_shape.radius),
             w(r.border_radius),
         ),
-        T32::RoundConvexPolyhedron(r) => {
-            let inner = hull(&r.inner_shape)?;
-            let inner = inner.as_convex_polyhedron().expect("a convex hull").clone();
-            SharedShape::new(RoundShape { inner_shape: inner, border_radius: w(r.border_radius) })
-        }
-        _ => {
-            return Err(Error::UnsupportedShape {
-                shape: format!("{:?}", shape.shape_type()),
-                why: "not a convex solid; decompose it into convex pieces (ConvexPolyhedron) or give a custom SDF",
-            })
-        }
+        T32::RoundConvexPolyhedron(r) => SharedShape::new(RoundShape {
+            inner_shape: hull(&r.inner_shape)?,
+            border_radius: w(r.border_radius),
+        }),
+        _ => return Err(not_convex(format!("{:?}", shape.shape_type()))),
     })
 }
 
@@ -113,6 +101,14 @@ impl ConvexShape {
     #[cfg(feature = "rapier-f32")]
     pub fn from_parry_f32(shape: &dyn rapier3d::parry::shape::Shape) -> Result<Self> {
         Self::from_parry(widen_f32(shape)?.as_ref())
+    }
+}
+
+/// The error for a parry shape (named `shape`) that is not a convex solid.
+fn not_convex(shape: String) -> Error {
+    Error::UnsupportedShape {
+        shape,
+        why: "not a convex solid; decompose it into convex pieces (ConvexPolyhedron) or give a custom SDF",
     }
 }
 
