@@ -38,9 +38,9 @@ pub const STABLE_SUBSTEPS_PER_HALF_PERIOD: Real = 2.5;
 /// The least indentation a resolved pair's approach may make in one sub-step, in spacings of
 /// the floating-point numbers that hold its bodies' coordinates. Below half a spacing the
 /// body's position does not change at all (`x + v Δt` rounds back to `x`): it stalls. At two,
-/// each sub-step's displacement is rounded by at most a quarter of itself, and the sphere–wall
-/// impacts of the precision table keep their restitution within 1.5 % of e. A step that
-/// cannot give every moving pair this is refused with
+/// each sub-step's displacement is rounded by at most a quarter of itself (what the rounding
+/// still costs a served impact is in the precision table of `docs/validation.md`). A step
+/// that cannot give every moving pair this is refused with
 /// [`Error::PrecisionTooLow`](crate::Error::PrecisionTooLow).
 pub const PRECISION_SPACINGS: Real = 2.0;
 
