@@ -867,7 +867,8 @@ fn curved_edges_apart_by_less_than_a_coarse_cell_are_not_joined() {
         };
         let (ra, rb) = (rot(), rot());
         let dir = Vector::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
-        let gap = 0.002 + 0.02 * rnd();
+        // Gaps from 1 µm to 20 mm, evenly in their logarithm: down to 1e-6 of a cell.
+        let gap = 1e-6 * 2e4f64.powf(rnd());
         let far = 20.0;
         // Bisect the centre distance to the gap.
         let pose_b = |t: f64| Pose::from_parts(dir * t, rb);
