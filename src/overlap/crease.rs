@@ -1,5 +1,5 @@
 //! A grid cell that a body's edge or corner passes through, integrated as the cell clipped by
-//! the bodies' tangent planes.
+//! the bodies' tangent planes or faces.
 //!
 //! Linear interpolation between exact surface crossings (see [`subcell`](super::subcell)) is
 //! second order where a surface is smooth, but it cuts off every edge and corner of a body: an
@@ -15,7 +15,9 @@
 //! face near the cell is the nearest face of one of those points — for flat-faced bodies, an
 //! edge through the cell has corners on both of its faces' sides — and an outer approximation
 //! with the surface's curvature error, second order, on a curved face such as a cylinder's
-//! side. Its volume, first moment and facet area vectors (per body) are closed-form.
+//! side. Its volume, first moment and facet area vectors (per body) are closed-form. A
+//! polyhedron needs no samples: its own faces that cut the cell bound it there exactly, and a
+//! cell that only polyhedral surfaces pass through is clipped by their faces alone.
 //!
 //! The planes are clipped in an order given by the geometry alone (sorted by their
 //! coefficients), so swapping the bodies clips the same planes in the same order and the cell's
@@ -23,8 +25,8 @@
 
 use crate::math::{Real, Vector};
 
-/// Vertices of all faces at most; a polyhedron that would need more sends the cell back to
-/// the tetrahedra.
+/// Vertex entries of all faces at most (a vertex counts once per face it is on); a polyhedron
+/// that would need more sends the cell back to the tetrahedra.
 const MAX_VERTS: usize = 256;
 
 /// Planes at most per cell: the samples' and those added by [`refine`](super::subcell).
@@ -32,6 +34,9 @@ pub(super) const MAX_PLANES: usize = 64;
 
 /// Faces at most: the cell's six and one per plane.
 const MAX_FACES: usize = 6 + MAX_PLANES;
+
+/// No vertex: a vertex the clip cut off.
+const GONE: u16 = u16::MAX;
 
 /// A tangent plane `n·y <= h` of body `body` (0: A, 1: B).
 #[derive(Clone, Copy, Debug)]
@@ -41,8 +46,9 @@ pub(super) struct Plane {
     pub(super) body: usize,
 }
 
-/// A face of the clipped cell: its vertices `start..start + len` of the vertex pool, in order
-/// around its outward normal, and the body whose plane it lies on (`None`: a face of the cell).
+/// A face of the clipped cell: entries `start..start + len` of its polyhedron's index list,
+/// the vertices in order around its outward normal, and the body whose plane it lies on
+/// (`None`: a face of the cell).
 #[derive(Clone, Copy)]
 struct Face {
     start: usize,
@@ -51,9 +57,13 @@ struct Face {
     normal: Vector,
 }
 
-/// A polyhedron as faces over a pool of vertices.
+/// A convex polyhedron: its distinct vertices, and its faces as cycles of their indices. Each
+/// vertex is stored once, so a clip measures it against the plane once, cuts each edge once
+/// (both faces of the edge share the new vertex) and chains the cap from the faces' cut edges
+/// instead of sorting its points by angle.
 struct Poly {
     verts: Vec<Vector>,
+    index: Vec<u16>,
     faces: Vec<Face>,
 }
 
@@ -61,9 +71,18 @@ struct Poly {
 /// other).
 pub(super) struct Scratch {
     polys: [Poly; 2],
-    cap: Vec<Vector>,
     /// Each vertex's signed distance from the plane being clipped.
     sides: Vec<Real>,
+    /// Each vertex's index in the clipped polyhedron, or [`GONE`].
+    kept: Vec<u16>,
+    /// The edges cut by the plane (their ends' indices, the lower first) and the new vertex.
+    cut_edges: Vec<(u16, u16, u16)>,
+    /// Per vertex of the clipped polyhedron: whether it lies on the plane.
+    on_plane: Vec<bool>,
+    /// The cap's edges, one per clipped face, in the cap's order about the plane's normal.
+    cap_edges: Vec<(u16, u16)>,
+    /// The cap's points when its edges do not chain (degenerate cuts).
+    cap: Vec<Vector>,
     /// Which of `polys` holds the last clip's result.
     current: usize,
     /// Distances from a plane below this count as on it (relative to the cell's size).
@@ -76,12 +95,19 @@ pub(super) struct Scratch {
 
 impl Scratch {
     pub(super) fn new() -> Self {
-        let poly =
-            || Poly { verts: Vec::with_capacity(MAX_VERTS), faces: Vec::with_capacity(MAX_FACES) };
+        let poly = || Poly {
+            verts: Vec::with_capacity(MAX_VERTS),
+            index: Vec::with_capacity(MAX_VERTS + MAX_FACES),
+            faces: Vec::with_capacity(MAX_FACES),
+        };
         Self {
             polys: [poly(), poly()],
-            cap: Vec::with_capacity(2 * MAX_FACES),
             sides: Vec::with_capacity(MAX_VERTS),
+            kept: Vec::with_capacity(MAX_VERTS),
+            cut_edges: Vec::with_capacity(MAX_VERTS),
+            on_plane: Vec::with_capacity(MAX_VERTS + MAX_FACES),
+            cap_edges: Vec::with_capacity(MAX_FACES),
+            cap: Vec::with_capacity(2 * MAX_FACES),
             current: 0,
             tol: 0.0,
             vertices: Vec::with_capacity(MAX_VERTS),
@@ -92,15 +118,8 @@ impl Scratch {
     /// Gathers into `vertices` the distinct vertices of the last clip's polyhedron.
     pub(super) fn gather_vertices(&mut self) {
         let Self { polys, vertices, current, .. } = self;
-        let poly = &polys[*current];
         vertices.clear();
-        for f in &poly.faces {
-            for v in &poly.verts[f.start..f.start + f.len] {
-                if !vertices.contains(v) {
-                    vertices.push(*v);
-                }
-            }
-        }
+        vertices.extend_from_slice(&polys[*current].verts);
     }
 }
 
@@ -138,26 +157,21 @@ pub(super) fn clip_cell(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option
 /// The planes are clipped in an order given by the geometry alone (sorted by their
 /// coefficients): the same for either labelling of the bodies.
 pub(super) fn clip_more(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
-    let Scratch { polys, cap, sides, current, tol, planes, .. } = scratch;
-    let planes = &mut planes[from..];
-    planes.sort_unstable_by(|p, q| {
+    scratch.planes[from..].sort_unstable_by(|p, q| {
         (p.n.x.total_cmp(&q.n.x))
             .then(p.n.y.total_cmp(&q.n.y))
             .then(p.n.z.total_cmp(&q.n.z))
             .then(p.h.total_cmp(&q.h))
     });
-    let mut next = 1 - *current;
-    for &p in planes.iter() {
-        if polys[*current].faces.is_empty() {
+    for k in from..scratch.planes.len() {
+        if scratch.polys[scratch.current].faces.is_empty() {
             break;
         }
-        let (a, b) = polys.split_at_mut(1);
-        let (from, to) = if *current == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) };
-        if clip(from, to, cap, sides, p, *tol)? {
-            std::mem::swap(current, &mut next);
+        if clip(scratch, scratch.planes[k])? {
+            scratch.current = 1 - scratch.current;
         }
     }
-    Some(integrals(&polys[*current]))
+    Some(integrals(&scratch.polys[scratch.current]))
 }
 
 /// Volume, first moment, per-body facet area vectors and areas, and the box of `poly`.
@@ -170,28 +184,20 @@ fn integrals(poly: &Poly) -> Clipped {
         lo: Vector::splat(Real::INFINITY),
         hi: Vector::splat(Real::NEG_INFINITY),
     };
-    let points: usize = poly.faces.iter().map(|f| f.len).sum();
-    if points == 0 {
+    if poly.faces.is_empty() {
         return out;
     }
-    let inner = poly
-        .faces
-        .iter()
-        .flat_map(|f| poly.verts[f.start..f.start + f.len].iter().copied())
-        .sum::<Vector>()
-        / points as Real;
+    let inner = poly.verts.iter().copied().sum::<Vector>() / poly.verts.len() as Real;
     for f in &poly.faces {
-        let p = &poly.verts[f.start..f.start + f.len];
+        let p = |i: usize| poly.verts[poly.index[f.start + i] as usize];
+        let p0 = p(0);
         let mut a = Vector::ZERO;
-        for i in 1..p.len() - 1 {
-            let v = (p[0] - inner).dot((p[i] - inner).cross(p[i + 1] - inner)).abs() / 6.0;
+        for i in 1..f.len - 1 {
+            let (p1, p2) = (p(i), p(i + 1));
+            let v = (p0 - inner).dot((p1 - inner).cross(p2 - inner)).abs() / 6.0;
             out.volume += v;
-            out.moment += (inner + p[0] + p[i] + p[i + 1]) * (0.25 * v);
-            a += (p[i] - p[0]).cross(p[i + 1] - p[0]);
-        }
-        for v in p {
-            out.lo = out.lo.min(*v);
-            out.hi = out.hi.max(*v);
+            out.moment += (inner + p0 + p1 + p2) * (0.25 * v);
+            a += (p1 - p0).cross(p2 - p0);
         }
         if let Some(s) = f.body {
             let area = 0.5 * a.length();
@@ -199,20 +205,17 @@ fn integrals(poly: &Poly) -> Clipped {
             out.area[s] += area;
         }
     }
+    for v in &poly.verts {
+        out.lo = out.lo.min(*v);
+        out.hi = out.hi.max(*v);
+    }
     out
 }
 
 /// The six faces of the box `lo`–`hi`.
 fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
-    let corner = |c: usize| {
-        Vector::new(
-            if c & 1 == 0 { lo.x } else { hi.x },
-            if c & 2 == 0 { lo.y } else { hi.y },
-            if c & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
     // Corner indices of each face, counter-clockwise seen from outside.
-    const QUADS: [([usize; 4], [Real; 3]); 6] = [
+    const QUADS: [([u16; 4], [Real; 3]); 6] = [
         ([0, 4, 6, 2], [-1.0, 0.0, 0.0]),
         ([1, 3, 7, 5], [1.0, 0.0, 0.0]),
         ([0, 1, 5, 4], [0.0, -1.0, 0.0]),
@@ -221,81 +224,216 @@ fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
         ([4, 5, 7, 6], [0.0, 0.0, 1.0]),
     ];
     poly.verts.clear();
+    poly.index.clear();
     poly.faces.clear();
+    poly.verts.extend((0..8).map(|c| {
+        Vector::new(
+            if c & 1 == 0 { lo.x } else { hi.x },
+            if c & 2 == 0 { lo.y } else { hi.y },
+            if c & 4 == 0 { lo.z } else { hi.z },
+        )
+    }));
     for (quad, n) in QUADS {
         poly.faces.push(Face {
-            start: poly.verts.len(),
+            start: poly.index.len(),
             len: 4,
             body: None,
             normal: Vector::from_array(n),
         });
-        poly.verts.extend(quad.iter().map(|&c| corner(c)));
+        poly.index.extend_from_slice(&quad);
     }
 }
 
-/// Writes into `to` the part of `from` with `n·x <= h`, closed by a face on the plane; returns
-/// `Some(false)` (and leaves `to` alone) when the plane cuts nothing off, `None` when the
-/// result would outgrow the buffers.
-fn clip(
-    from: &Poly,
-    to: &mut Poly,
-    cap: &mut Vec<Vector>,
-    sides: &mut Vec<Real>,
-    plane: Plane,
-    tol: Real,
-) -> Option<bool> {
+/// Replaces the scratch's current polyhedron by its part with `n·x <= h`, closed by a face on
+/// the plane (written into the other polyhedron); returns `Some(false)` (and changes nothing)
+/// when the plane cuts nothing off, `None` when the result would outgrow the buffers.
+fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
+    let Scratch { polys, sides, kept, cut_edges, on_plane, cap_edges, cap, current, tol, .. } =
+        scratch;
+    let tol = *tol;
     sides.clear();
-    sides.extend(from.verts.iter().map(|&x| {
+    let mut beyond = false;
+    for &x in &polys[*current].verts {
         let s = plane.n.dot(x) - plane.h;
-        if s.abs() <= tol {
-            0.0
-        } else {
-            s
+        let s = if s.abs() <= tol { 0.0 } else { s };
+        beyond |= s > 0.0;
+        sides.push(s);
+    }
+    if !beyond {
+        // A face on the plane lies on that body's surface (a body's face on a node layer,
+        // with the corners there outside the body: the plane was added as one that touches).
+        let from = &mut polys[*current];
+        for f in &mut from.faces {
+            let on = |k: &u16| sides[*k as usize] == 0.0;
+            if f.body.is_none() && from.index[f.start..f.start + f.len].iter().all(on) {
+                (f.body, f.normal) = (Some(plane.body), plane.n);
+            }
         }
-    }));
-    if sides.iter().all(|&s| s <= 0.0) {
         return Some(false);
     }
+    let (a, b) = polys.split_at_mut(1);
+    let (from, to) = if *current == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) };
     to.verts.clear();
+    to.index.clear();
     to.faces.clear();
-    cap.clear();
+    kept.clear();
+    on_plane.clear();
+    for (&x, &s) in from.verts.iter().zip(sides.iter()) {
+        kept.push(if s <= 0.0 {
+            to.verts.push(x);
+            on_plane.push(s == 0.0);
+            (to.verts.len() - 1) as u16
+        } else {
+            GONE
+        });
+    }
+    cut_edges.clear();
+    cap_edges.clear();
+    // A face whose cut leaves other than one edge on the plane (a degenerate cut, within
+    // `tol`): the cap is then ordered by angle.
+    let mut chained = true;
     for f in &from.faces {
-        let start = to.verts.len();
-        let (p, side) = (&from.verts[f.start..f.start + f.len], &sides[f.start..f.start + f.len]);
-        for k in 0..p.len() {
-            let next = if k + 1 == p.len() { 0 } else { k + 1 };
-            let (a, b, sa, sb) = (p[k], p[next], side[k], side[next]);
-            if sa <= 0.0 {
-                to.verts.push(a);
-                if sa == 0.0 {
-                    cap.push(a);
+        let start = to.index.len();
+        let idx = &from.index[f.start..f.start + f.len];
+        let (mut inside, mut outside, mut touches) = (true, true, false);
+        for &i in idx {
+            let s = sides[i as usize];
+            inside &= s < 0.0;
+            outside &= s > 0.0;
+            touches |= s == 0.0;
+        }
+        if outside {
+            continue;
+        }
+        if inside {
+            to.index.extend(idx.iter().map(|&i| kept[i as usize]));
+            to.faces.push(Face { start, ..*f });
+            continue;
+        }
+        // Where the face leaves the half-space and where it comes back.
+        let (mut exit, mut entry) = (GONE, GONE);
+        let mut i = idx[idx.len() - 1] as usize;
+        for &j in idx {
+            let j = j as usize;
+            let (si, sj) = (sides[i], sides[j]);
+            if (si < 0.0 && sj > 0.0) || (si > 0.0 && sj < 0.0) {
+                // Each edge is cut once, from its inside end, for both of its faces.
+                let key = (i.min(j) as u16, i.max(j) as u16);
+                let v = match cut_edges.iter().find(|e| (e.0, e.1) == key) {
+                    Some(e) => e.2,
+                    None => {
+                        let (p, q) = if si < 0.0 { (i, j) } else { (j, i) };
+                        let (xp, xq) = (from.verts[p], from.verts[q]);
+                        to.verts.push(xp + (xq - xp) * (sides[p] / (sides[p] - sides[q])));
+                        on_plane.push(true);
+                        let v = (to.verts.len() - 1) as u16;
+                        cut_edges.push((key.0, key.1, v));
+                        v
+                    }
+                };
+                to.index.push(v);
+                if si < 0.0 {
+                    exit = v;
+                } else {
+                    entry = v;
                 }
             }
-            if (sa < 0.0 && sb > 0.0) || (sa > 0.0 && sb < 0.0) {
-                let x = a + (b - a) * (sa / (sa - sb));
-                to.verts.push(x);
-                cap.push(x);
+            if sj <= 0.0 {
+                to.index.push(kept[j]);
+            }
+            i = j;
+        }
+        let len = to.index.len() - start;
+        if len < 3 {
+            to.index.truncate(start);
+            continue;
+        }
+        if !touches {
+            // A clean cut: its edge on the plane runs from the exit to the entry (the faces
+            // are counter-clockwise about their outward normals); the cap walks it backwards.
+            cap_edges.push((entry, exit));
+            to.faces.push(Face { start, len, ..*f });
+            continue;
+        }
+        let face = &to.index[start..];
+        let mut on_edges = 0;
+        for k in 0..len {
+            let (u, w) = (face[k], face[if k + 1 == len { 0 } else { k + 1 }]);
+            if on_plane[u as usize] && on_plane[w as usize] {
+                on_edges += 1;
+                if on_edges == 1 {
+                    cap_edges.push((w, u));
+                }
             }
         }
-        let len = to.verts.len() - start;
-        if len >= 3 {
-            to.faces.push(Face { start, len, ..*f });
-        } else {
-            to.verts.truncate(start);
+        if on_edges == len {
+            // A face on the plane with a vertex beyond it: the polyhedron lies beyond the
+            // plane, and what is left is that face alone — no volume, but a facet of the
+            // plane's body (where a body's face lies on a node layer, the cell beyond it holds
+            // the facet, as the tetrahedra do).
+            cap.clear();
+            cap.extend(to.index[start..].iter().map(|&v| to.verts[v as usize]));
+            to.verts.clear();
+            to.verts.extend_from_slice(cap);
+            to.index.clear();
+            to.index.extend(0..len as u16);
+            to.faces.clear();
+            to.faces.push(Face { start: 0, len, body: Some(plane.body), normal: plane.n });
+            return Some(true);
         }
+        chained &= on_edges <= 1;
+        to.faces.push(Face { start, len, ..*f });
     }
-    super::polyhedra::cap_polygon(cap, plane.n, tol);
-    let distinct = cap.len();
-    if distinct >= 3 && !to.faces.is_empty() {
-        to.faces.push(Face {
-            start: to.verts.len(),
-            len: distinct,
-            body: Some(plane.body),
-            normal: plane.n,
-        });
-        to.verts.extend_from_slice(cap);
+    if to.faces.is_empty() {
+        return Some(true);
     }
-    (to.verts.len() <= MAX_VERTS && to.faces.len() <= MAX_FACES).then_some(true)
+    let start = to.index.len();
+    if chained && chain(cap_edges, &mut to.index) {
+        // The chain is the cap.
+    } else {
+        to.index.truncate(start);
+        cap.clear();
+        let on = to.verts.iter().zip(on_plane.iter()).filter(|v| *v.1).map(|v| *v.0);
+        cap.extend(on);
+        super::polyhedra::cap_polygon(cap, plane.n, tol);
+        // Each point is one of the vertices it was taken from.
+        let index = cap.iter().filter_map(|x| to.verts.iter().position(|y| y == x));
+        to.index.extend(index.map(|v| v as u16));
+    }
+    let len = to.index.len() - start;
+    if len >= 3 {
+        to.faces.push(Face { start, len, body: Some(plane.body), normal: plane.n });
+    } else {
+        to.index.truncate(start);
+    }
+    (to.index.len() <= MAX_VERTS && to.faces.len() <= MAX_FACES).then_some(true)
+}
+
+/// Appends to `out` the cycle the cap's `edges` form, each vertex once; whether they form one
+/// (every edge used once, each vertex left by one edge), else `out` may hold part of it.
+fn chain(edges: &[(u16, u16)], out: &mut Vec<u16>) -> bool {
+    if edges.len() < 3 || edges.len() > 128 {
+        return false;
+    }
+    let mut used = 1u128;
+    let (first, mut at) = edges[0];
+    out.push(first);
+    while at != first {
+        let mut next = None;
+        for (k, e) in edges.iter().enumerate() {
+            if e.0 == at && used & (1 << k) == 0 {
+                if next.is_some() {
+                    return false;
+                }
+                next = Some(k);
+            }
+        }
+        let Some(k) = next else { return false };
+        used |= 1 << k;
+        out.push(at);
+        at = edges[k].1;
+    }
+    used.count_ones() as usize == edges.len()
 }
 
 #[cfg(test)]

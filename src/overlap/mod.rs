@@ -228,6 +228,16 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
             .collect()
     }
 
+    /// The body's face planes in the pair's frame when they bound exactly the body its SDF
+    /// describes: a polyhedron without enlargement (an enlarged one has rounded edges).
+    fn exact_planes(&self) -> Option<Vec<(Vector, Real)>> {
+        if self.eps == 0.0 {
+            self.planes()
+        } else {
+            None
+        }
+    }
+
     /// The shape's bounds in the pair's frame, enlarged by `ε`; infinite components stay infinite.
     fn bounds(&self) -> Aabb {
         let b = self.shape.local_bounds();

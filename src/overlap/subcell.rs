@@ -16,7 +16,9 @@
 //! tangent planes instead). Cells are told apart by the distance at their centre, and only for
 //! bodies that may have edges ([`Sdf::has_edges`]); for those, cells whose corners all lie
 //! outside a body but within a cell's diagonal of it are tested too — a corner may reach in
-//! between the nodes.
+//! between the nodes. A polyhedron ([`Sdf::face_planes`], not enlarged) clips by its own faces
+//! there, and a cell that only polyhedral surfaces pass through is clipped by their faces
+//! without the test: a pair of polyhedra is integrated exactly.
 //!
 //! Root finding instead of interpolating SDF values matters: inside a cylinder or a box the
 //! SDF has kinks (the nearest face changes), where interpolated values would misplace the
@@ -145,6 +147,12 @@ thread_local! {
         const { std::cell::RefCell::new(([Vec::new(), Vec::new()], [Vec::new(), Vec::new()], 0)) };
 }
 
+thread_local! {
+    /// Each thread's tangent-plane clip buffers, kept between evaluations.
+    static SCRATCH: std::cell::RefCell<Option<crease::Scratch>> =
+        const { std::cell::RefCell::new(None) };
+}
+
 impl EdgeCache {
     fn new(nodes: usize, m: usize) -> Self {
         let (mut t, mut gradients, mut stamp) =
@@ -232,6 +240,9 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     edges: [bool; 2],
     /// Buffers of the tangent-plane clip, reused from cell to cell.
     scratch: crease::Scratch,
+    /// Each body's face planes when it is a polyhedron: a bent cell is clipped by those that
+    /// cut it (the body within the cell exactly) instead of by tangent planes at samples.
+    faces: [Option<Vec<Plane>>; 2],
 }
 
 /// Volume, moment, normal and bounds summed over the clipped pieces.
@@ -246,6 +257,21 @@ struct Sums {
 }
 
 impl Sums {
+    /// Adds a clipped cell's integrals; a cell whose clip left only a body's face on its
+    /// boundary adds that facet alone.
+    fn add_clipped(&mut self, k: &crease::Clipped) {
+        if k.volume > 0.0 {
+            self.volume += k.volume;
+            self.moment += k.moment;
+            self.lo = self.lo.min(k.lo);
+            self.hi = self.hi.max(k.hi);
+        }
+        for s in 0..2 {
+            self.normal[s] += k.normal[s];
+            self.area[s] += k.area[s];
+        }
+    }
+
     /// Adds body `s`'s facet `poly` (oriented along `outward`) to its area vector and area.
     fn add_facet(&mut self, s: usize, poly: &[Vert], outward: Vector) {
         let a = area_vector(poly, outward);
@@ -557,10 +583,17 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         memo_len: 0,
         sums,
         edges: [pair.a.has_edges(), pair.b.has_edges()],
-        scratch: crease::Scratch::new(),
+        scratch: SCRATCH.with(|s| s.borrow_mut().take()).unwrap_or_else(crease::Scratch::new),
+        faces: [pair.a.exact_planes(), pair.b.exact_planes()].map(|planes| {
+            planes.map(|p| p.into_iter().map(|(n, h)| Plane { n, h, body: 0 }).collect())
+        }),
     };
+    for (s, faces) in cutter.faces.iter_mut().enumerate() {
+        faces.iter_mut().flatten().for_each(|p| p.body = s);
+    }
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
+    let polyhedral = [cutter.faces[0].is_some(), cutter.faces[1].is_some()];
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
@@ -601,12 +634,20 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                         key: Vert::node_key(node as u32),
                     }
                 });
+                if (in_a == 0xFF || polyhedral[0]) && (in_b == 0xFF || polyhedral[1]) {
+                    // Every surface that may pass through the cell is a polyhedron's: the
+                    // cell clipped by their faces is the overlap in it, exactly.
+                    if cutter.polyhedral_cell(&corners, [in_a, in_b], diagonal) {
+                        continue;
+                    }
+                }
                 cutter.memo_len = 0;
                 cutter.cell(&corners, h, [in_a, in_b]);
             }
         }
     }
-    let it = &cutter.sums;
+    let Cutter { sums: it, scratch, .. } = cutter;
+    SCRATCH.with(|s| *s.borrow_mut() = Some(scratch));
     Integral {
         volume: it.volume,
         centroid: if it.volume > 0.0 { it.moment / it.volume } else { Vector::ZERO },
@@ -637,6 +678,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     fn cell(&mut self, c: &[Vert; 8], h: Vector, [in_a, in_b]: [u8; 2]) {
         let centre = c[0].x + h * 0.5;
         let diagonal = h.length();
+        let inside = [in_a, in_b];
         let tested = [self.edges[0] && in_a != 0xFF, self.edges[1] && in_b != 0xFF];
         let (ca, cb) = if tested[0] || tested[1] { self.pair.both(centre) } else { (0.0, 0.0) };
         if (tested[0] && in_a == 0 && ca > 0.5 * diagonal)
@@ -664,8 +706,13 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                     1
                 }
             };
-            let samples = [samples(0, in_a), samples(1, in_b)];
+            // A polyhedron's own faces, not its tangent planes at samples.
+            let samples =
+                [0, 1].map(|s| if self.faces[s].is_some() { 0 } else { samples(s, inside[s]) });
             self.tangent_planes(c, samples, [ca, cb]);
+            if !self.face_planes(c, inside, diagonal) {
+                return;
+            }
             let mut clipped = crease::clip_cell(c[0].x, c[7].x, &mut self.scratch);
             let mut rounds = 0;
             while let Some(k) = clipped {
@@ -680,17 +727,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                         continue;
                     }
                 }
-                let it = &mut self.sums;
-                if k.volume > 0.0 {
-                    it.volume += k.volume;
-                    it.moment += k.moment;
-                    it.lo = it.lo.min(k.lo);
-                    it.hi = it.hi.max(k.hi);
-                    for s in 0..2 {
-                        it.normal[s] += k.normal[s];
-                        it.area[s] += k.area[s];
-                    }
-                }
+                self.sums.add_clipped(&k);
                 return;
             }
         }
@@ -700,6 +737,58 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         for tet in TETS {
             self.tet(&tet.map(|i| c[i]));
         }
+    }
+
+    /// The overlap in a cell that only polyhedral surfaces may pass through (`c`, the bodies'
+    /// corner bits `inside`): the cell clipped by their faces. `false` when the clip outgrew
+    /// its buffers (the caller integrates the cell otherwise).
+    fn polyhedral_cell(&mut self, c: &[Vert; 8], inside: [u8; 2], diagonal: Real) -> bool {
+        self.scratch.planes.clear();
+        if !self.face_planes(c, inside, diagonal) {
+            return true;
+        }
+        match crease::clip_cell(c[0].x, c[7].x, &mut self.scratch) {
+            Some(k) => {
+                self.sums.add_clipped(&k);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Adds to the cell's planes the faces of each polyhedral body that cut or touch the cell
+    /// (`c`, its `diagonal`), unless the body holds all its corners (`inside`); `false` when a
+    /// face has the whole cell beyond it (the body does not reach into the cell).
+    ///
+    /// A face that only touches the cell lies on its boundary (a node layer, within round-off)
+    /// with the corners there outside the body: it is a facet of the overlap in this cell, as
+    /// the tetrahedra would find it. Had those corners counted as inside, the cell beyond the
+    /// layer would hold the face instead (see [`crease`]).
+    fn face_planes(&mut self, c: &[Vert; 8], inside: [u8; 2], diagonal: Real) -> bool {
+        let tol = 1e-12 * diagonal;
+        let (lo, hi) = (c[0].x, c[7].x);
+        let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+        for (s, faces) in self.faces.iter().enumerate() {
+            let Some(faces) = faces else { continue };
+            if inside[s] == 0xFF {
+                continue;
+            }
+            for p in faces {
+                // The plane's offset at the cell's centre and its spread over the corners.
+                let (centre, spread) = (p.n.dot(mid) - p.h, p.n.abs().dot(half));
+                if centre - spread > tol {
+                    return false;
+                }
+                let reach = centre + spread;
+                // A face that touches the cell matters only where the corners on it count as
+                // outside the body.
+                let facet = || c.iter().any(|v| v.d[s] > 0.0 && (p.n.dot(v.x) - p.h).abs() <= tol);
+                if reach > tol || (reach >= -tol && facet()) {
+                    self.scratch.planes.push(*p);
+                }
+            }
+        }
+        true
     }
 
     /// Adds to the cell's planes the tangent plane of each clipping body (`clips`) at every
