@@ -240,8 +240,8 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     edges: [bool; 2],
     /// Buffers of the tangent-plane clip, reused from cell to cell.
     scratch: crease::Scratch,
-    /// Each body's face planes when it is a polyhedron: a bent cell is clipped by those that
-    /// cut it (the body within the cell exactly) instead of by tangent planes at samples.
+    /// Each body's face planes when it is a polyhedron: its cells are clipped by those that cut
+    /// them (the body within the cell exactly) instead of by tangent planes at samples.
     faces: [Option<Vec<Plane>>; 2],
 }
 
@@ -575,6 +575,9 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         lo: inf,
         hi: -inf,
     };
+    let faces = |body: usize, planes: Option<Vec<(Vector, Real)>>| {
+        planes.map(|p| p.into_iter().map(|(n, h)| Plane { n, h, body }).collect())
+    };
     let mut cutter = Cutter {
         pair,
         cache: EdgeCache::new(values.len(), m),
@@ -584,13 +587,8 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         sums,
         edges: [pair.a.has_edges(), pair.b.has_edges()],
         scratch: SCRATCH.with(|s| s.borrow_mut().take()).unwrap_or_else(crease::Scratch::new),
-        faces: [pair.a.exact_planes(), pair.b.exact_planes()].map(|planes| {
-            planes.map(|p| p.into_iter().map(|(n, h)| Plane { n, h, body: 0 }).collect())
-        }),
+        faces: [faces(0, pair.a.exact_planes()), faces(1, pair.b.exact_planes())],
     };
-    for (s, faces) in cutter.faces.iter_mut().enumerate() {
-        faces.iter_mut().flatten().for_each(|p| p.body = s);
-    }
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
     let polyhedral = [cutter.faces[0].is_some(), cutter.faces[1].is_some()];

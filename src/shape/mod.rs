@@ -87,8 +87,10 @@ pub trait Sdf: Send + Sync {
 
     /// The face planes `(n, h)` — outward normal and offset, `n·p <= h` inside — when the
     /// body is the intersection of finitely many half-spaces (for the exact overlap of
-    /// [`OverlapSettings::with_exact_polyhedra`](crate::OverlapSettings::with_exact_polyhedra));
-    /// `None` (the default) otherwise. The normal need not be unit (the overlap scales `n` and
+    /// [`OverlapSettings::with_exact_polyhedra`](crate::OverlapSettings::with_exact_polyhedra),
+    /// and on the sub-cell grid, whose cells such a body clips by the faces that cut them);
+    /// `None` (the default) otherwise. The planes must bound exactly the body
+    /// [`distance`](Self::distance) describes. The normal need not be unit (the overlap scales `n` and
     /// `h` together); a zero or non-finite plane sends the pair to the `N_c` grid instead.
     fn face_planes(&self) -> Option<Vec<(Vector, Real)>> {
         None
