@@ -19,10 +19,7 @@ fn spread(mut e: Vec<f64>) -> (f64, f64) {
 
 /// First touches at `N_c = 2`, 8 and 16 and, for `N_c = 8`, the persistent contact seeded
 /// with the first touch's box: volume and contact point equal the exact clipping's to
-/// round-off. (The grid interpolating between surface crossings, with tangent planes at
-/// samples in the cells an edge passes through, was 1 % short in the worst case at `N_c = 8`
-/// and missed a pair in 2000 at `N_c = 4` before the cutting-plane box; interpolation alone,
-/// 5 % short in the median.)
+/// round-off.
 #[test]
 fn the_grid_finds_every_polyhedral_overlap_exactly() {
     let mut rng = polyhedra::Rng(0x9E37_79B9_7F4A_7C15);

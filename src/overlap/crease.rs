@@ -134,18 +134,30 @@ pub(super) struct Clipped {
     pub(super) hi: Vector,
 }
 
+/// Distances from a plane below this count as on it, in the box `lo`–`hi` (the clip's
+/// tolerance, relative to the box's size).
+pub(super) fn tolerance(lo: Vector, hi: Vector) -> Real {
+    1e-12 * (hi - lo).length()
+}
+
+/// The least and the greatest of `n·x − h` over the corners `x` of the box `lo`–`hi`.
+pub(super) fn span(plane: &Plane, lo: Vector, hi: Vector) -> (Real, Real) {
+    let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+    let (centre, spread) = (plane.n.dot(mid) - plane.h, plane.n.abs().dot(half));
+    (centre - spread, centre + spread)
+}
+
 /// Whether the plane cuts the box `lo`–`hi` at all (some corner lies beyond it by more than
 /// `tol`): a plane that does not changes nothing and is left out.
 pub(super) fn cuts(plane: &Plane, lo: Vector, hi: Vector, tol: Real) -> bool {
-    let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
-    plane.n.dot(mid) + plane.n.abs().dot(half) > plane.h + tol
+    span(plane, lo, hi).1 > tol
 }
 
 /// Sets the polyhedron to the cell `lo`–`hi` clipped by all of `scratch.planes` and returns
 /// its integrals; `None` when the polyhedron would outgrow the buffers (the caller integrates
 /// the cell's tetrahedra instead). Zero volume when the planes cut the cell away.
 pub(super) fn clip_cell(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option<Clipped> {
-    scratch.tol = 1e-12 * (hi - lo).length();
+    scratch.tol = tolerance(lo, hi);
     scratch.current = 0;
     cell_faces(lo, hi, &mut scratch.polys[0]);
     clip_more(0, scratch)
@@ -388,9 +400,8 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
         return Some(true);
     }
     let start = to.index.len();
-    if chained && chain(cap_edges, &mut to.index) {
-        // The chain is the cap.
-    } else {
+    // The cap is the chain of the faces' cut edges, or else its points ordered by angle.
+    if !(chained && chain(cap_edges, &mut to.index)) {
         to.index.truncate(start);
         cap.clear();
         let on = to.verts.iter().zip(on_plane.iter()).filter(|v| *v.1).map(|v| *v.0);

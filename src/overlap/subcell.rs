@@ -635,7 +635,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                 if (in_a == 0xFF || polyhedral[0]) && (in_b == 0xFF || polyhedral[1]) {
                     // Every surface that may pass through the cell is a polyhedron's: the
                     // cell clipped by their faces is the overlap in it, exactly.
-                    if cutter.polyhedral_cell(&corners, [in_a, in_b], diagonal) {
+                    if cutter.polyhedral_cell(&corners, [in_a, in_b]) {
                         continue;
                     }
                 }
@@ -708,7 +708,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             let samples =
                 [0, 1].map(|s| if self.faces[s].is_some() { 0 } else { samples(s, inside[s]) });
             self.tangent_planes(c, samples, [ca, cb]);
-            if !self.face_planes(c, inside, diagonal) {
+            if !self.face_planes(c, inside) {
                 return;
             }
             let mut clipped = crease::clip_cell(c[0].x, c[7].x, &mut self.scratch);
@@ -740,9 +740,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     /// The overlap in a cell that only polyhedral surfaces may pass through (`c`, the bodies'
     /// corner bits `inside`): the cell clipped by their faces. `false` when the clip outgrew
     /// its buffers (the caller integrates the cell otherwise).
-    fn polyhedral_cell(&mut self, c: &[Vert; 8], inside: [u8; 2], diagonal: Real) -> bool {
+    fn polyhedral_cell(&mut self, c: &[Vert; 8], inside: [u8; 2]) -> bool {
         self.scratch.planes.clear();
-        if !self.face_planes(c, inside, diagonal) {
+        if !self.face_planes(c, inside) {
             return true;
         }
         match crease::clip_cell(c[0].x, c[7].x, &mut self.scratch) {
@@ -755,29 +755,26 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     }
 
     /// Adds to the cell's planes the faces of each polyhedral body that cut or touch the cell
-    /// (`c`, its `diagonal`), unless the body holds all its corners (`inside`); `false` when a
-    /// face has the whole cell beyond it (the body does not reach into the cell).
+    /// `c`, unless the body holds all its corners (`inside`); `false` when a face has the whole
+    /// cell beyond it (the body does not reach into the cell).
     ///
     /// A face that only touches the cell lies on its boundary (a node layer, within round-off)
     /// with the corners there outside the body: it is a facet of the overlap in this cell, as
     /// the tetrahedra would find it. Had those corners counted as inside, the cell beyond the
     /// layer would hold the face instead (see [`crease`]).
-    fn face_planes(&mut self, c: &[Vert; 8], inside: [u8; 2], diagonal: Real) -> bool {
-        let tol = 1e-12 * diagonal;
+    fn face_planes(&mut self, c: &[Vert; 8], inside: [u8; 2]) -> bool {
         let (lo, hi) = (c[0].x, c[7].x);
-        let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+        let tol = crease::tolerance(lo, hi);
         for (s, faces) in self.faces.iter().enumerate() {
             let Some(faces) = faces else { continue };
             if inside[s] == 0xFF {
                 continue;
             }
             for p in faces {
-                // The plane's offset at the cell's centre and its spread over the corners.
-                let (centre, spread) = (p.n.dot(mid) - p.h, p.n.abs().dot(half));
-                if centre - spread > tol {
+                let (near, reach) = crease::span(p, lo, hi);
+                if near > tol {
                     return false;
                 }
-                let reach = centre + spread;
                 // A face that touches the cell matters only where the corners on it count as
                 // outside the body.
                 let facet = || c.iter().any(|v| v.d[s] > 0.0 && (p.n.dot(v.x) - p.h).abs() <= tol);
@@ -877,7 +874,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
         let mut planes = std::mem::take(&mut self.scratch.planes);
         planes.clear();
-        let tol = 1e-12 * (c[7].x - c[0].x).length();
+        let tol = crease::tolerance(c[0].x, c[7].x);
         for s in 0..2 {
             for (k, &(x, d)) in points[..samples[s]].iter().enumerate() {
                 let gradient = |x: Vector| {
