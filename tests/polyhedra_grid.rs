@@ -18,15 +18,15 @@ fn spread(mut e: Vec<f64>) -> (f64, f64) {
 }
 
 /// First touches at `N_c = 2`, 8 and 16 and, for `N_c = 8`, the persistent contact seeded
-/// with the first touch's box: volume and contact point equal the exact clipping's to
-/// round-off.
+/// with the first touch's box (its grid puts node layers on faces): volume, contact point,
+/// surface area and normal equal the exact clipping's to round-off.
 #[test]
 fn the_grid_finds_every_polyhedral_overlap_exactly() {
     let mut rng = polyhedra::Rng(0x9E37_79B9_7F4A_7C15);
     let cases = 2000;
     let settings = |n| OverlapSettings::new(n, IntegrationMode::Subcell).unwrap();
     let (s2, s8, s16) = (settings(2), settings(8), settings(16));
-    let (mut volume, mut point) = (vec![], vec![]);
+    let (mut volume, mut point, mut area, mut normal) = (vec![], vec![], vec![], vec![]);
     for k in 0..cases {
         let case = polyhedra::case(&mut rng, k);
         let eval = |s: &OverlapSettings, previous: Option<&parry3d_f64::bounding_volume::Aabb>| {
@@ -41,9 +41,15 @@ fn the_grid_finds_every_polyhedral_overlap_exactly() {
             let (ev, ec) = polyhedra::errors(&case, &g);
             volume.push(ev);
             point.push(ec);
+            let (ea, en) = polyhedra::facet_errors(&case, &g);
+            area.push(ea);
+            normal.push(en);
         }
     }
     let ((vm, vw), (pm, pw)) = (spread(volume), spread(point));
+    let ((am, aw), (nm, nw)) = (spread(area), spread(normal));
     println!("volume error median {vm:.2e} worst {vw:.2e}, point {pm:.2e} / {pw:.2e}");
+    println!("surface area error median {am:.2e} worst {aw:.2e}, normal {nm:.2e} / {nw:.2e} rad");
     assert!(vw <= 1e-9 && pw <= 1e-9, "volume error worst {vw:e}, contact point {pw:e}");
+    assert!(aw <= 1e-9 && nw <= 1e-9, "surface area error worst {aw:e}, normal {nw:e} rad");
 }

@@ -406,14 +406,42 @@ impl Grid {
         Self { lo: self.lo - self.h, h: self.h, n: self.n + 2 }
     }
 
-    /// Node values `(d_A, d_B)` on all `(n+1)^3` nodes, x fastest.
-    fn sample<A: Sdf + ?Sized, B: Sdf + ?Sized>(&self, pair: &Pair<'_, A, B>) -> Vec<(Real, Real)> {
+    /// Node values `(d_A, d_B)` on all `(n+1)^3` nodes, x fastest, for integration in `mode`.
+    ///
+    /// In sub-cell mode, where both bodies are polyhedra bounded exactly by their faces, every
+    /// cell is clipped by
+    /// those faces, and the grid asks of a node only which bodies hold it and whether a body
+    /// may reach into the node's cells (lies within a cell's diagonal of it). A node's largest
+    /// face-plane value answers both, more loosely: it is the distance inside and a lower bound
+    /// of it outside (the same sign, zero on the surface), so a few more cells are clipped to
+    /// nothing. A body of more faces than a box's six (a convex hull, whose distance outside
+    /// walks its faces' edges) takes that value instead of its distance.
+    fn sample<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        pair: &Pair<'_, A, B>,
+        mode: IntegrationMode,
+    ) -> Vec<(Real, Real)> {
         let m = self.n + 1;
         let mut out = Vec::with_capacity(m * m * m);
+        let planes = match mode {
+            IntegrationMode::Subcell => pair.a.exact_planes().zip(pair.b.exact_planes()),
+            IntegrationMode::Count => None,
+        };
+        let bound = |planes: &[(Vector, Real)]| (planes.len() > 6).then(|| planes.to_vec());
+        let [bound_a, bound_b] = match &planes {
+            Some((a, b)) => [bound(a), bound(b)],
+            None => [None, None],
+        };
+        let largest = |planes: &[(Vector, Real)], x: Vector| {
+            planes.iter().fold(Real::NEG_INFINITY, |d, (n, h)| d.max(n.dot(x) - h))
+        };
         for k in 0..m {
             for j in 0..m {
                 for i in 0..m {
-                    out.push(pair.both(self.node(i, j, k)));
+                    let x = self.node(i, j, k);
+                    let da = bound_a.as_ref().map_or_else(|| pair.a.distance(x), |p| largest(p, x));
+                    let db = bound_b.as_ref().map_or_else(|| pair.b.distance(x), |p| largest(p, x));
+                    out.push((da, db));
                 }
             }
         }
@@ -744,13 +772,13 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             // One more node layer around the box: the surface layer of the paper's normal lies
             // outside the overlap, also where the overlap fills the box up to a face.
             let outer = grid.padded();
-            count::integrate(pair, &outer, &outer.sample(pair))
+            count::integrate(pair, &outer, &outer.sample(pair, IntegrationMode::Count))
         }
         IntegrationMode::Subcell => {
             // A quarter cell of padding: flat faces on the box's faces become facets.
             let pad = grid.h * 0.25;
             let padded = Grid::on(&Aabb::new(corrected.mins - pad, corrected.maxs + pad), n)?;
-            subcell::integrate(pair, &padded, &padded.sample(pair))
+            subcell::integrate(pair, &padded, &padded.sample(pair, IntegrationMode::Subcell))
         }
     };
     finish(pair, integral, &grid, rough, *corrected)
@@ -771,7 +799,8 @@ fn first_touch<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let grid = Grid::on(bounds, settings.n_c)?;
     let pad = grid.h * 0.25;
     let padded = Grid::on(&Aabb::new(bounds.mins - pad, bounds.maxs + pad), settings.n_c)?;
-    let integral = subcell::integrate(pair, &padded, &padded.sample(pair));
+    let integral =
+        subcell::integrate(pair, &padded, &padded.sample(pair, IntegrationMode::Subcell));
     let pieces = integral.bounds?;
     overlap_in_box(pair, &pieces, rough, settings)
         .or_else(|| finish(pair, integral, &grid, rough, pieces))
@@ -789,7 +818,7 @@ fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 ) -> Option<OverlapGeometry> {
     let inner = Grid::on(&intersect(previous, rough)?, n)?;
     let grid = inner.padded();
-    let values = grid.sample(pair);
+    let values = grid.sample(pair, IntegrationMode::Subcell);
     let m = n + 3;
     let on_boundary = |i: usize| i == 0 || i == m - 1;
     for k in 0..m {

@@ -242,7 +242,8 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     scratch: crease::Scratch,
     /// Each body's face planes when it is a polyhedron: its cells are clipped by those that cut
     /// them (the body within the cell exactly) instead of by tangent planes at samples.
-    faces: [Option<Vec<Plane>>; 2],
+    /// Each face comes with its spread over a cell, `|n|·h/2`: the cells all have the same size.
+    faces: [Option<Vec<(Plane, Real)>>; 2],
 }
 
 /// Volume, moment, normal and bounds summed over the clipped pieces.
@@ -576,7 +577,8 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         hi: -inf,
     };
     let faces = |body: usize, planes: Option<Vec<(Vector, Real)>>| {
-        planes.map(|p| p.into_iter().map(|(n, h)| Plane { n, h, body }).collect())
+        let spread = |n: Vector| n.abs().dot(h * 0.5);
+        planes.map(|p| p.into_iter().map(|(n, h)| (Plane { n, h, body }, spread(n))).collect())
     };
     let mut cutter = Cutter {
         pair,
@@ -592,6 +594,10 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
     let polyhedral = [cutter.faces[0].is_some(), cutter.faces[1].is_some()];
+    // Where both bodies are polyhedra, a face on a node layer is the facet of the cell on its
+    // body's side ([`Cutter::face_planes`]), even one wholly inside both bodies.
+    let face_tol = crease::tolerance(Vector::ZERO, h);
+    let on_face = |far: Real| polyhedral == [true; 2] && far >= -face_tol;
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
@@ -599,11 +605,14 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                 // of a box lie wholly outside one body.
                 let base = grid.index(i, j, k);
                 let (mut near_a, mut near_b) = (Real::INFINITY, Real::INFINITY);
+                let (mut far_a, mut far_b) = (Real::NEG_INFINITY, Real::NEG_INFINITY);
                 let (mut in_a, mut in_b) = (0u8, 0u8);
                 for (c, off) in offsets.into_iter().enumerate() {
                     let (da, db) = values[base + off];
                     near_a = near_a.min(da);
                     near_b = near_b.min(db);
+                    far_a = far_a.max(da);
+                    far_b = far_b.max(db);
                     in_a |= ((da <= 0.0) as u8) << c;
                     in_b |= ((db <= 0.0) as u8) << c;
                 }
@@ -615,7 +624,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     continue;
                 }
                 let origin = grid.node(i, j, k);
-                if in_a == 0xFF && in_b == 0xFF {
+                if in_a == 0xFF && in_b == 0xFF && !on_face(far_a) && !on_face(far_b) {
                     let it = &mut cutter.sums;
                     it.volume += cell;
                     it.moment += (origin + h * 0.5) * cell;
@@ -635,7 +644,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                 if (in_a == 0xFF || polyhedral[0]) && (in_b == 0xFF || polyhedral[1]) {
                     // Every surface that may pass through the cell is a polyhedron's: the
                     // cell clipped by their faces is the overlap in it, exactly.
-                    if cutter.polyhedral_cell(&corners, [in_a, in_b]) {
+                    if cutter.polyhedral_cell(&corners) {
                         continue;
                     }
                 }
@@ -708,7 +717,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             let samples =
                 [0, 1].map(|s| if self.faces[s].is_some() { 0 } else { samples(s, inside[s]) });
             self.tangent_planes(c, samples, [ca, cb]);
-            if !self.face_planes(c, inside) {
+            if !self.face_planes(c) {
                 return;
             }
             let mut clipped = crease::clip_cell(c[0].x, c[7].x, &mut self.scratch);
@@ -737,12 +746,12 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
     }
 
-    /// The overlap in a cell that only polyhedral surfaces may pass through (`c`, the bodies'
-    /// corner bits `inside`): the cell clipped by their faces. `false` when the clip outgrew
-    /// its buffers (the caller integrates the cell otherwise).
-    fn polyhedral_cell(&mut self, c: &[Vert; 8], inside: [u8; 2]) -> bool {
+    /// The overlap in a cell `c` that only polyhedral surfaces may pass through: the cell
+    /// clipped by their faces. `false` when the clip outgrew its buffers (the caller integrates
+    /// the cell otherwise).
+    fn polyhedral_cell(&mut self, c: &[Vert; 8]) -> bool {
         self.scratch.planes.clear();
-        if !self.face_planes(c, inside) {
+        if !self.face_planes(c) {
             return true;
         }
         match crease::clip_cell(c[0].x, c[7].x, &mut self.scratch) {
@@ -754,31 +763,42 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
     }
 
-    /// Adds to the cell's planes the faces of each polyhedral body that cut or touch the cell
-    /// `c`, unless the body holds all its corners (`inside`); `false` when a face has the whole
-    /// cell beyond it (the body does not reach into the cell).
+    /// Adds to the cell's planes the faces of each polyhedral body that cut the cell `c`, and
+    /// those on its boundary whose facet the cell holds; `false` when a body does not reach
+    /// into the cell (a face has the whole cell beyond it).
     ///
-    /// A face that only touches the cell lies on its boundary (a node layer, within round-off)
-    /// with the corners there outside the body: it is a facet of the overlap in this cell, as
-    /// the tetrahedra would find it. Had those corners counted as inside, the cell beyond the
-    /// layer would hold the face instead (see [`crease`]).
-    fn face_planes(&mut self, c: &[Vert; 8], inside: [u8; 2]) -> bool {
+    /// A face lying on a node layer (as the persistent grid puts them, within round-off) is a
+    /// facet of exactly one of the two cells it separates. Where both bodies are polyhedra,
+    /// every cell is clipped, and the facet goes to the cell on the body's side: the face
+    /// touches it, and the clip makes the cell's face on the plane the body's facet (see
+    /// [`crease`]); the cell beyond holds nothing of the body and is skipped. Where the other
+    /// body is round, the cells it is not bent in are integrated on tetrahedra, which give the
+    /// facet to the cell on the body's side when a corner on the layer counts as outside the
+    /// body (its distance's round-off), else to the cell beyond (a flat facet); the clip
+    /// follows the same rule there.
+    fn face_planes(&mut self, c: &[Vert; 8]) -> bool {
         let (lo, hi) = (c[0].x, c[7].x);
-        let tol = crease::tolerance(lo, hi);
+        let (mid, tol) = ((lo + hi) * 0.5, crease::tolerance(lo, hi));
+        let pure = self.faces.iter().all(Option::is_some);
         for (s, faces) in self.faces.iter().enumerate() {
             let Some(faces) = faces else { continue };
-            if inside[s] == 0xFF {
-                continue;
-            }
-            for p in faces {
-                let (near, reach) = crease::span(p, lo, hi);
+            for (p, spread) in faces {
+                let centre = p.n.dot(mid) - p.h;
+                let (near, reach) = (centre - spread, centre + spread);
                 if near > tol {
                     return false;
                 }
-                // A face that touches the cell matters only where the corners on it count as
-                // outside the body.
-                let facet = || c.iter().any(|v| v.d[s] > 0.0 && (p.n.dot(v.x) - p.h).abs() <= tol);
-                if reach > tol || (reach >= -tol && facet()) {
+                // The cell on the body's side holds the facet (a corner on the plane counts as
+                // outside the body).
+                let inner_side =
+                    || pure || c.iter().any(|v| v.d[s] > 0.0 && (p.n.dot(v.x) - p.h).abs() <= tol);
+                if near >= -tol {
+                    // The cell lies beyond the face, its own face on the plane.
+                    if inner_side() {
+                        return false;
+                    }
+                    self.scratch.planes.push(*p);
+                } else if reach > tol || (reach >= -tol && inner_side()) {
                     self.scratch.planes.push(*p);
                 }
             }

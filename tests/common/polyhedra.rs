@@ -106,3 +106,11 @@ pub fn errors(case: &Case, g: &OverlapGeometry) -> (f64, f64) {
     let size = (e.corrected_box.maxs - e.corrected_box.mins).length();
     ((g.volume - e.volume) / e.volume, (g.contact_point - e.contact_point).length() / size)
 }
+
+/// Relative surface-area error and the angle (rad) between `g`'s normal and the exact one.
+#[allow(dead_code)]
+pub fn facet_errors(case: &Case, g: &OverlapGeometry) -> (f64, f64) {
+    let e = &case.exact;
+    let angle = g.normal.cross(e.normal).length().atan2(g.normal.dot(e.normal));
+    ((g.surface_area - e.surface_area) / e.surface_area, angle)
+}
