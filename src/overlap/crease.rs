@@ -167,7 +167,27 @@ pub(super) fn clip_cell(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option
         return Some(integrals(poly));
     }
     cell_faces(lo, hi, poly);
+    // A plane with the whole cell on or beyond it (a body's face on the cell's boundary) leaves
+    // at most the cell's face on it: clipped first, the other planes cut that face alone.
+    let tol = scratch.tol;
+    let flat = scratch.planes.iter().enumerate().filter(|(_, p)| span(p, lo, hi).0 >= -tol);
+    if let Some((k, _)) = flat.min_by(|(_, p), (_, q)| order(p, q)) {
+        scratch.planes.swap(0, k);
+        if clip(scratch, scratch.planes[0])? {
+            scratch.current = 1 - scratch.current;
+        }
+        return clip_more(1, scratch);
+    }
     clip_more(0, scratch)
+}
+
+/// The order the planes are clipped in: by their coefficients, so the same for either
+/// labelling of the bodies.
+fn order(p: &Plane, q: &Plane) -> std::cmp::Ordering {
+    (p.n.x.total_cmp(&q.n.x))
+        .then(p.n.y.total_cmp(&q.n.y))
+        .then(p.n.z.total_cmp(&q.n.z))
+        .then(p.h.total_cmp(&q.h))
 }
 
 /// Whether two of the planes together leave nothing of the box `lo`–`hi`: every point of it
@@ -203,12 +223,7 @@ fn excluded(planes: &[Plane], lo: Vector, hi: Vector, margin: Real) -> bool {
 /// The planes are clipped in an order given by the geometry alone (sorted by their
 /// coefficients): the same for either labelling of the bodies.
 pub(super) fn clip_more(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
-    scratch.planes[from..].sort_unstable_by(|p, q| {
-        (p.n.x.total_cmp(&q.n.x))
-            .then(p.n.y.total_cmp(&q.n.y))
-            .then(p.n.z.total_cmp(&q.n.z))
-            .then(p.h.total_cmp(&q.h))
-    });
+    scratch.planes[from..].sort_unstable_by(order);
     for k in from..scratch.planes.len() {
         if scratch.polys[scratch.current].faces.is_empty() {
             break;
