@@ -156,7 +156,18 @@ pub(super) fn cuts(plane: &Plane, lo: Vector, hi: Vector, tol: Real) -> bool {
 /// Sets the polyhedron to the cell `lo`–`hi` clipped by all of `scratch.planes` and returns
 /// its integrals; `None` when the polyhedron would outgrow the buffers (the caller integrates
 /// the cell's tetrahedra instead). Zero volume when the planes cut the cell away.
-pub(super) fn clip_cell(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option<Clipped> {
+///
+/// `deepest_first` clips the planes that cut deepest first (the largest share of the box's
+/// span beyond them), so the polyhedron the others cut stays small and one that ends empty
+/// does so early: for a polyhedron's own faces, whose clip is exact whatever the order. Else
+/// the planes go by their coefficients, a plane with the whole cell on or beyond it first (a
+/// body's face on the cell's boundary leaves at most that face for the others to cut).
+pub(super) fn clip_cell(
+    lo: Vector,
+    hi: Vector,
+    scratch: &mut Scratch,
+    deepest_first: bool,
+) -> Option<Clipped> {
     scratch.tol = tolerance(lo, hi);
     scratch.current = 0;
     let poly = &mut scratch.polys[0];
@@ -167,8 +178,12 @@ pub(super) fn clip_cell(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option
         return Some(integrals(poly));
     }
     cell_faces(lo, hi, poly);
-    // A plane with the whole cell on or beyond it (a body's face on the cell's boundary) leaves
-    // at most the cell's face on it: clipped first, the other planes cut that face alone.
+    if deepest_first {
+        let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+        let depth = |p: &Plane| (p.n.dot(mid) - p.h) / p.n.abs().dot(half);
+        scratch.planes.sort_unstable_by(|p, q| depth(q).total_cmp(&depth(p)).then(order(p, q)));
+        return clip_planes(0, scratch);
+    }
     let tol = scratch.tol;
     let flat = scratch.planes.iter().enumerate().filter(|(_, p)| span(p, lo, hi).0 >= -tol);
     if let Some((k, _)) = flat.min_by(|(_, p), (_, q)| order(p, q)) {
@@ -224,6 +239,12 @@ fn excluded(planes: &[Plane], lo: Vector, hi: Vector, margin: Real) -> bool {
 /// coefficients): the same for either labelling of the bodies.
 pub(super) fn clip_more(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
     scratch.planes[from..].sort_unstable_by(order);
+    clip_planes(from, scratch)
+}
+
+/// Clips the current polyhedron by `scratch.planes[from..]` in their order and returns the
+/// integrals of what is left (`None` as in [`clip_cell`]).
+fn clip_planes(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
     for k in from..scratch.planes.len() {
         if scratch.polys[scratch.current].faces.is_empty() {
             break;
@@ -507,7 +528,7 @@ mod tests {
         let n = Vector::new(1.0, 1.0, 0.0).normalize();
         let mut scratch = Scratch::new();
         scratch.planes.push(Plane { n, h: n.dot(Vector::new(0.5, 0.5, 0.0)), body: 1 });
-        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch).unwrap();
+        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch, false).unwrap();
         assert!((c.volume - 0.5).abs() < 1e-14);
         let centroid = c.moment / c.volume;
         assert!((centroid - Vector::new(1.0 / 3.0, 1.0 / 3.0, 0.5)).length() < 1e-14);
@@ -524,11 +545,11 @@ mod tests {
             Plane { n: Vector::Y, h: 0.5, body: 0 },
             Plane { n: Vector::Z, h: 2.0, body: 1 },
         ]);
-        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch).unwrap();
+        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch, false).unwrap();
         assert!((c.volume - 0.25).abs() < 1e-14);
         assert!((c.area[0] - 1.0).abs() < 1e-14 && c.area[1] == 0.0);
         scratch.planes.clear();
         scratch.planes.push(Plane { n: -Vector::Z, h: -1.5, body: 1 });
-        assert_eq!(clip_cell(Vector::ZERO, Vector::ONE, &mut scratch).unwrap().volume, 0.0);
+        assert_eq!(clip_cell(Vector::ZERO, Vector::ONE, &mut scratch, false).unwrap().volume, 0.0);
     }
 }

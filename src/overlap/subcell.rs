@@ -720,7 +720,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             if !self.face_planes(c) {
                 return;
             }
-            let mut clipped = crease::clip_cell(c[0].x, c[7].x, &mut self.scratch);
+            let mut clipped = crease::clip_cell(c[0].x, c[7].x, &mut self.scratch, false);
             let mut rounds = 0;
             while let Some(k) = clipped {
                 // Only a cell with no corner in both bodies can hold a polyhedron that misses
@@ -754,7 +754,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         if !self.face_planes(c) {
             return true;
         }
-        match crease::clip_cell(c[0].x, c[7].x, &mut self.scratch) {
+        match crease::clip_cell(c[0].x, c[7].x, &mut self.scratch, true) {
             Some(k) => {
                 self.sums.add_clipped(&k);
                 true
