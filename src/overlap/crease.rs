@@ -217,10 +217,9 @@ fn order(p: &Plane, q: &Plane) -> std::cmp::Ordering {
 /// at an end (the ends are the planes alone). Three or more planes can exclude the box
 /// together where no two do; those cells are clipped.
 fn excluded(planes: &[Plane], lo: Vector, hi: Vector, margin: Real) -> bool {
-    let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
     let least = |p: &Plane, q: &Plane, t: Real| {
-        let n = p.n * t + q.n * (1.0 - t);
-        n.dot(mid) - n.abs().dot(half) - (p.h * t + q.h * (1.0 - t))
+        let mixture = Plane { n: p.n * t + q.n * (1.0 - t), h: p.h * t + q.h * (1.0 - t), ..*p };
+        span(&mixture, lo, hi).0
     };
     planes.iter().enumerate().any(|(i, p)| {
         planes[i + 1..].iter().any(|q| {

@@ -409,13 +409,12 @@ impl Grid {
     /// Node values `(d_A, d_B)` on all `(n+1)^3` nodes, x fastest, for integration in `mode`.
     ///
     /// In sub-cell mode, where both bodies are polyhedra bounded exactly by their faces, every
-    /// cell is clipped by
-    /// those faces, and the grid asks of a node only which bodies hold it and whether a body
-    /// may reach into the node's cells (lies within a cell's diagonal of it). A node's largest
-    /// face-plane value answers both, more loosely: it is the distance inside and a lower bound
-    /// of it outside (the same sign, zero on the surface), so a few more cells are clipped to
-    /// nothing. A body of more faces than a box's six (a convex hull, whose distance outside
-    /// walks its faces' edges) takes that value instead of its distance.
+    /// cell is clipped by those faces, and the grid asks of a node only which bodies hold it
+    /// and whether a body may reach into the node's cells (lies within a cell's diagonal of
+    /// it). A node's largest face-plane value answers both, more loosely: it is the distance
+    /// inside and a lower bound of it outside (the same sign, zero on the surface), so a few
+    /// more cells are clipped to nothing. A body of more faces than a box's six (a convex hull,
+    /// whose distance outside walks its faces' edges) takes that value instead of its distance.
     fn sample<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         pair: &Pair<'_, A, B>,
@@ -427,9 +426,8 @@ impl Grid {
             IntegrationMode::Subcell => pair.a.exact_planes().zip(pair.b.exact_planes()),
             IntegrationMode::Count => None,
         };
-        let bound = |planes: &[(Vector, Real)]| (planes.len() > 6).then(|| planes.to_vec());
         let [bound_a, bound_b] = match &planes {
-            Some((a, b)) => [bound(a), bound(b)],
+            Some((a, b)) => [a, b].map(|p| (p.len() > 6).then_some(p.as_slice())),
             None => [None, None],
         };
         let largest = |planes: &[(Vector, Real)], x: Vector| {
@@ -439,8 +437,8 @@ impl Grid {
             for j in 0..m {
                 for i in 0..m {
                     let x = self.node(i, j, k);
-                    let da = bound_a.as_ref().map_or_else(|| pair.a.distance(x), |p| largest(p, x));
-                    let db = bound_b.as_ref().map_or_else(|| pair.b.distance(x), |p| largest(p, x));
+                    let da = bound_a.map_or_else(|| pair.a.distance(x), |p| largest(p, x));
+                    let db = bound_b.map_or_else(|| pair.b.distance(x), |p| largest(p, x));
                     out.push((da, db));
                 }
             }
