@@ -10,8 +10,10 @@
 //! indentation by the approach along the normal, the volume along the overlap's own power law
 //! `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the secant of the
 //! last two full evaluations, or at first the shape measure the stiffness uses), the contact
-//! point as between two balls about the bodies' centres, the normal as the surfaces' own
-//! normals at the contact point turn. First touch, a
+//! point as between two balls about the bodies' centres and across the contact plane as a
+//! tilt of the surfaces moves the overlap's centroid (by the overlap's spread,
+//! [`OverlapGeometry::spread`]), the normal as the surfaces' own normals at the contact point
+//! turn. First touch, a
 //! contact whose update would part the bodies, and any motion beyond the bound get a full
 //! evaluation. The rule reads only the contact's state, so results do not depend on the
 //! thread count and a checkpoint resumes bit-identically.
@@ -21,7 +23,7 @@ use parry3d_f64::bounding_volume::Aabb;
 use crate::error::Result;
 use crate::force::{contact_force_with_history, BodyKinematics, ContactForce};
 use crate::material::PairParameters;
-use crate::math::{Pose, Real, Rotation, Vector};
+use crate::math::{Matrix, Pose, Real, Rotation, Vector};
 use crate::overlap::{compute_overlap, OverlapGeometry, OverlapSettings};
 use crate::shape::Sdf;
 use crate::tangential::TangentialHistory;
@@ -114,6 +116,17 @@ pub struct Reference {
     pub lever: Real,
     /// The overlap grid's cell (m): the corrected box's longest side over `N_c`.
     pub cell: Real,
+    /// The overlap's spread (B's frame, m⁵; see [`OverlapGeometry::spread`]), zero where the
+    /// evaluation gave none: how far an update moves the centroid when the surfaces tilt.
+    #[cfg_attr(feature = "checkpoint", serde(default = "zero_matrix"))]
+    pub spread: Matrix,
+}
+
+/// The zero matrix (a checkpoint written before [`Reference::spread`] existed has no tilt
+/// response).
+#[cfg(feature = "checkpoint")]
+fn zero_matrix() -> Matrix {
+    Matrix::ZERO
 }
 
 impl Reference {
@@ -142,9 +155,12 @@ impl Reference {
         // (not when both turn alike, as in B's frame under a spinning B, nor for a ball
         // spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels across the
         // grid by the shift plus the roll.
-        let turn =
-            ((gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1])).length();
-        let tilt = TILT_WEIGHT * turn * self.reach;
+        let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
+        let (tilted, weight) = match self.tilted(turned, deepening) {
+            Some(t) => (t, TILT_WEIGHT),
+            None => (Tilt { volume: 0.0, shift: Vector::ZERO }, FROZEN_TILT),
+        };
+        let tilt = weight * turned.length() * self.reach;
         if !(deepening.abs() + tilt <= fraction * self.indentation
             && across + chord * self.lever <= fraction * self.cell)
         {
@@ -167,14 +183,56 @@ impl Reference {
             return None;
         }
         let normal = Rotation::from_rotation_arc(before, now) * self.normal;
+        let volume = self.volume * ratio.powf(p) + tilted.volume;
+        if !(volume > 0.0) {
+            return None;
+        }
+        let contact_point = contact_point + tilted.shift;
+        let to_world = Matrix::from_quat(pose_b.rotation);
         Some(OverlapGeometry {
-            volume: self.volume * ratio.powf(p),
+            volume,
             contact_point: pose_b.transform_point(contact_point),
             normal: pose_b.rotation * normal,
             indentation: self.indentation * ratio,
             surface_area: self.surface_area * ratio.powf(p - 1.0),
             corrected_box,
+            spread: Some(to_world * self.spread * to_world.transpose()),
         })
+    }
+
+    /// The first-order effect of a tilt on an overlap between two nearly parallel surfaces
+    /// (`None` for others: an edge, a corner, faces at an angle): `turned`, how far the bodies' summed
+    /// distance gradients at the contact point turned since this reference, is the change of
+    /// the overlap's depth gradient across the contact plane (its in-plane part `t`: the depth
+    /// at an in-plane offset `u` from the centroid changes by `−t·u`); `approach` is the ball
+    /// rule's approach of A's `motion` (see [`deepening`](Self::deepening)).
+    ///
+    /// Over a footprint of area `A` that stays put (a face on a face) with second moment
+    /// `J = ∫ u uᵀ dA` about the centroid, the centroid moves by `(δa S₁ − J t)/V` and the
+    /// volume changes by `−t·S₁`, where `δa` is the approach at the centroid and `S₁ = ∫ u dA`.
+    /// The volume's in-plane spread `C = ∫ u uᵀ d(u) dA` is `J` times the mean depth `d/p`
+    /// (`A = dV/dd = pV/d` by the volume law), and a depth `d(u) = d − g·u` (`g` the in-plane
+    /// gradient sum at the reference) puts the footprint's centre at `S₁ = J g/d` from the
+    /// centroid. `δa` is the ball rule's approach (at A's centre: a face turned about a centre
+    /// not above the centroid approaches there by `t·(c_A − x_c)` more, left to the allowance:
+    /// the volume law's rate is measured against the ball rule's approach). Otherwise exact to
+    /// first order in the tilt for a face on a face; for a cap an estimate within the allowances (round bodies
+    /// rolling on each other do not turn their gradients: no change). Where the faces meet at a
+    /// small angle the footprint ends where the depth does, so its change is of second order
+    /// too. The surfaces count as nearly parallel while `|g| ≤` [`PARALLEL`]; between an edge
+    /// or a corner and a face, `g` is no depth gradient (the gradient inside a body near its
+    /// edge is a face's normal).
+    fn tilted(&self, turned: Vector, approach: Real) -> Option<Tilt> {
+        let n = self.normal;
+        let across = |v: Vector| v - n * n.dot(v);
+        let (t, g) = (across(turned), across(self.gradients[0] + self.gradients[1]));
+        let d = self.indentation;
+        if g.length() > PARALLEL {
+            return None;
+        }
+        let j = self.spread * (self.exponent / d);
+        let s1 = j * g / d;
+        Some(Tilt { volume: -t.dot(s1), shift: across(s1 * approach - j * t) / self.volume })
     }
 
     /// A's motion in B's frame since this reference, for A now at `relative`.
@@ -237,11 +295,21 @@ fn surface_gradients<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 }
 
 /// How much more a tilt counts than an approach against the normal allowance. An update
-/// follows the approach (volume and indentation along the overlap's volume law) but not the
-/// uneven depth a tilt gives a face resting on a face, which moves the overlap's centroid and
-/// so makes the restoring torque of a rocking body: frozen for too long, that torque lags the
-/// rocking, feeds it, and a box on a ramp walks down.
-const TILT_WEIGHT: Real = 8.0;
+/// moves the centroid as a tilt does to first order ([`Reference::tilted`]: the restoring
+/// torque of a rocking body follows the rocking), but not what grows with the tilt's square;
+/// where a full evaluation then corrects the force by a jump, a box at rest on a slope is
+/// nudged at every one and creeps down (`tests/friction.rs` with a weight of 2, the
+/// `stability_report` ramp with 1).
+const TILT_WEIGHT: Real = 4.0;
+
+/// [`TILT_WEIGHT`] where an update cannot follow the tilt ([`Reference::tilted`] gives
+/// `None`): the centroid stays, so the restoring torque lags the rocking unless the tilt is
+/// held smaller.
+const FROZEN_TILT: Real = 8.0;
+
+/// Largest angle (rad, as the in-plane part of the summed gradients) between two surfaces
+/// whose tilt an update follows ([`Reference::tilted`]).
+const PARALLEL: Real = 0.1;
 
 /// Relative change of the indentation, `|ln(d₁/d₀)|`, below which two full evaluations are too
 /// close to measure the volume law by their secants (the last law is kept).
@@ -276,6 +344,14 @@ fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry
 /// `geometry_reuse` outside `0 <= fraction <= 100`.
 pub fn check_reuse(fraction: Real) -> Result<Real> {
     crate::error::check_range("geometry_reuse", fraction, 0.0..=100.0, "0 <= fraction <= 100")
+}
+
+/// A tilt's first-order effect on an updated overlap (see [`Reference::tilted`]).
+struct Tilt {
+    /// Change of the volume beyond the approach's (m³).
+    volume: Real,
+    /// The centroid's move (B's frame, m).
+    shift: Vector,
 }
 
 /// A's body frame in B's body frame.
@@ -321,9 +397,10 @@ impl ContactModel {
     /// full evaluations a live contact's geometry is updated from the pair's relative motion
     /// (see the module docs) while
     /// - its local indentation changes by at most `fraction × d` — the approach along the
-    ///   normal plus eight times the tilt across the overlap (how far the surfaces' normals at
-    ///   the contact point turned, times the corrected box's diagonal; an update does not move
-    ///   the centroid as a tilt does), and
+    ///   normal plus four times the tilt across the overlap (how far the surfaces' normals at
+    ///   the contact point turned, times the corrected box's diagonal; eight times where the
+    ///   surfaces meet at an angle: an update moves the centroid as a tilt does only between
+    ///   nearly parallel surfaces, and only to first order), and
     /// - A's material point at the contact travels across the grid by at most
     ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
     ///   the roll's chord at the nearer body's bounding-sphere centre.
@@ -475,6 +552,10 @@ impl ContactModel {
             reach,
             lever: r_a.min(r_b).max(reach),
             cell: sides.max_element() / self.settings.n_c() as Real,
+            spread: g.spread.map_or(Matrix::ZERO, |c| {
+                let to_b = Matrix::from_quat(b.pose.rotation.inverse());
+                to_b * c * to_b.transpose()
+            }),
         }
     }
 }

@@ -1,5 +1,6 @@
 //! The paper's integration (Marquardt et al. §3.3.3): count the grid nodes inside both bodies.
 
+use super::spread::Spread;
 use super::{Grid, Integral, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
@@ -25,9 +26,11 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     };
     let mut count = 0usize;
     let mut sum = Vector::ZERO;
+    let mut second = Spread::default();
     let mut normal = Vector::ZERO;
     let mut area = 0.0;
     let h = grid.h;
+    let cell = h.x * h.y * h.z;
     let face_area = Vector::new(h.y * h.z, h.x * h.z, h.x * h.y);
     for k in 0..=n {
         for j in 0..=n {
@@ -37,6 +40,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     if in_box(i) && in_box(j) && in_box(k) {
                         count += 1;
                         sum += grid.node(i, j, k);
+                        second.add_box(grid.node(i, j, k), h, cell);
                     }
                     continue;
                 }
@@ -77,10 +81,12 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             }
         }
     }
-    let cell = h.x * h.y * h.z;
+    let volume = count as Real * cell;
+    let centroid = if count > 0 { sum / count as Real } else { Vector::ZERO };
     Integral {
-        volume: count as Real * cell,
-        centroid: if count > 0 { sum / count as Real } else { Vector::ZERO },
+        volume,
+        centroid,
+        spread: second.central(volume, centroid),
         normal,
         surface_area: area,
         bounds: None,

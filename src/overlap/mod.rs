@@ -36,6 +36,7 @@ mod correction;
 mod count;
 mod crease;
 mod polyhedra;
+mod spread;
 mod subcell;
 
 use parry3d_f64::bounding_volume::Aabb;
@@ -168,6 +169,11 @@ pub struct OverlapGeometry {
     /// bounds the pair tighter; B's for the closed-form spheres): pass it back as
     /// `previous_box` next sub-step.
     pub corrected_box: Aabb,
+    /// The overlap's spread, the central second moment of its volume `∫ (x − x_c)(x − x_c)ᵀ dV`
+    /// (m⁵, world axes), where the grid integrated it; `None` from the closed-form spheres and
+    /// the exact polyhedra. Across the contact plane it measures how far the overlap reaches:
+    /// how much its centroid moves when the surfaces tilt against each other.
+    pub spread: Option<Matrix>,
 }
 
 /// A body's SDF placed in the pair's frame (A's or B's body frame): `d(x) = sdf(R^T (x - t)) - ε`.
@@ -477,6 +483,8 @@ pub(crate) struct Integral {
     /// Un-normalised B→A normal (zero when the grid saw no surface).
     normal: Vector,
     surface_area: Real,
+    /// Central second moment of the volume, `∫ (x − c)(x − c)ᵀ dV` (pair frame).
+    spread: Matrix,
     /// Box of the integrated pieces (sub-cell mode; `None` for counting).
     bounds: Option<Aabb>,
 }
@@ -579,6 +587,10 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let to_world = |g: OverlapGeometry| OverlapGeometry {
         contact_point: frame.transform_point(g.contact_point),
         normal: frame.rotation * g.normal,
+        spread: g.spread.map(|c| {
+            let r = Matrix::from_quat(frame.rotation);
+            r * c * r.transpose()
+        }),
         ..g
     };
     if settings.exact_polyhedra {
@@ -863,6 +875,7 @@ fn finish<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         indentation,
         surface_area: integral.surface_area,
         corrected_box,
+        spread: Some(integral.spread),
     })
 }
 
