@@ -138,14 +138,17 @@ type NodeGradients = [Vec<(u32, Vector)>; 2];
 struct EdgeCache {
     t: Crossings,
     gradients: NodeGradients,
+    /// Per node, which bodies may reach its cells (see [`integrate`]); rewritten each evaluation.
+    reach: Vec<u8>,
     stamp: u32,
     m: usize,
 }
 
 thread_local! {
     /// Each thread's edge-cache buffers and the last stamp used, kept between evaluations.
-    static SPARE: std::cell::RefCell<(Crossings, NodeGradients, u32)> =
-        const { std::cell::RefCell::new(([Vec::new(), Vec::new()], [Vec::new(), Vec::new()], 0)) };
+    static SPARE: std::cell::RefCell<(Crossings, NodeGradients, Vec<u8>, u32)> = const {
+        std::cell::RefCell::new(([Vec::new(), Vec::new()], [Vec::new(), Vec::new()], Vec::new(), 0))
+    };
 }
 
 thread_local! {
@@ -156,7 +159,7 @@ thread_local! {
 
 impl EdgeCache {
     fn new(nodes: usize, m: usize) -> Self {
-        let (mut t, mut gradients, mut stamp) =
+        let (mut t, mut gradients, reach, mut stamp) =
             SPARE.with(|s| std::mem::take(&mut *s.borrow_mut()));
         if stamp == u32::MAX {
             // Stamps wrapped: forget every slot once.
@@ -175,7 +178,7 @@ impl EdgeCache {
                 v.resize(nodes, (0, Vector::ZERO));
             }
         }
-        Self { t, gradients, stamp, m }
+        Self { t, gradients, reach, stamp, m }
     }
 
     /// Body `s`'s gradient at node `n`: computed by `gradient` the first time this evaluation
@@ -220,8 +223,8 @@ impl EdgeCache {
 impl Drop for EdgeCache {
     fn drop(&mut self) {
         let (t, gradients) = (std::mem::take(&mut self.t), std::mem::take(&mut self.gradients));
-        let stamp = self.stamp;
-        SPARE.with(|s| *s.borrow_mut() = (t, gradients, stamp));
+        let (reach, stamp) = (std::mem::take(&mut self.reach), self.stamp);
+        SPARE.with(|s| *s.borrow_mut() = (t, gradients, reach, stamp));
     }
 }
 
@@ -596,6 +599,14 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     };
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
+    // Per node: bit `s` set when body `s` may reach a cell with the node as a corner.
+    let reach_within = |s: usize| if edges[s] { diagonal } else { 0.0 };
+    let (within_a, within_b) = (reach_within(0), reach_within(1));
+    let mut reach = std::mem::take(&mut cutter.cache.reach);
+    reach.clear();
+    reach.extend(
+        values.iter().map(|&(da, db)| (da <= within_a) as u8 | ((db <= within_b) as u8) << 1),
+    );
     let polyhedral = [cutter.faces[0].is_some(), cutter.faces[1].is_some()];
     // Where both bodies are polyhedra, a face on a node layer is the facet of the cell on its
     // body's side ([`Cutter::face_planes`]), even one wholly inside both bodies.
@@ -607,24 +618,21 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                 // Classify by the corners' inside bits before building any vertex: most cells
                 // of a box lie wholly outside one body.
                 let base = grid.index(i, j, k);
-                let (mut near_a, mut near_b) = (Real::INFINITY, Real::INFINITY);
+                // A body reaches into a cell when a corner lies inside it — or, for a body with
+                // edges, when a corner lies within the cell's diagonal: an edge or a corner may
+                // reach between the nodes.
+                let reached = offsets.iter().fold(0u8, |f, off| f | reach[base + off]);
+                if reached != 3 {
+                    continue;
+                }
                 let (mut far_a, mut far_b) = (Real::NEG_INFINITY, Real::NEG_INFINITY);
                 let (mut in_a, mut in_b) = (0u8, 0u8);
                 for (c, off) in offsets.into_iter().enumerate() {
                     let (da, db) = values[base + off];
-                    near_a = near_a.min(da);
-                    near_b = near_b.min(db);
                     far_a = far_a.max(da);
                     far_b = far_b.max(db);
                     in_a |= ((da <= 0.0) as u8) << c;
                     in_b |= ((db <= 0.0) as u8) << c;
-                }
-                // A body reaches into a cell when a corner lies inside it — or, for a body with
-                // edges, when a corner lies within the cell's diagonal: an edge or a corner may
-                // reach between the nodes.
-                let reach = |s: usize, near: Real| near <= if edges[s] { diagonal } else { 0.0 };
-                if !(reach(0, near_a) && reach(1, near_b)) {
-                    continue;
                 }
                 let origin = grid.node(i, j, k);
                 if in_a == 0xFF && in_b == 0xFF && !on_face(far_a) && !on_face(far_b) {
@@ -666,6 +674,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             }
         }
     }
+    cutter.cache.reach = reach;
     let Cutter { sums: it, scratch, .. } = cutter;
     SCRATCH.with(|s| *s.borrow_mut() = Some(scratch));
     let centroid = if it.volume > 0.0 { it.moment / it.volume } else { Vector::ZERO };
