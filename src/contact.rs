@@ -11,8 +11,8 @@
 //! `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the secant of the
 //! last two full evaluations, or at first the shape measure the stiffness uses), the contact
 //! point as between two balls about the bodies' centres and across the contact plane as a
-//! tilt of the surfaces moves the overlap's centroid (by the overlap's spread,
-//! [`OverlapGeometry::spread`]), the normal as the surfaces' own normals at the contact point
+//! tilt of the surfaces moves the overlap's centroid (by the overlap's footprint,
+//! [`OverlapGeometry::footprint`]), the normal as the surfaces' own normals at the contact point
 //! turn. First touch, a
 //! contact whose update would part the bodies, and any motion beyond the bound get a full
 //! evaluation. The rule reads only the contact's state, so results do not depend on the
@@ -23,8 +23,8 @@ use parry3d_f64::bounding_volume::Aabb;
 use crate::error::Result;
 use crate::force::{contact_force_with_history, BodyKinematics, ContactForce};
 use crate::material::PairParameters;
-use crate::math::{Matrix, Pose, Real, Rotation, Vector};
-use crate::overlap::{compute_overlap, OverlapGeometry, OverlapSettings};
+use crate::math::{Pose, Real, Rotation, Vector};
+use crate::overlap::{compute_overlap, Footprint, OverlapGeometry, OverlapSettings};
 use crate::shape::Sdf;
 use crate::tangential::TangentialHistory;
 
@@ -116,17 +116,10 @@ pub struct Reference {
     pub lever: Real,
     /// The overlap grid's cell (m): the corrected box's longest side over `N_c`.
     pub cell: Real,
-    /// The overlap's spread (B's frame, m⁵; see [`OverlapGeometry::spread`]), zero where the
-    /// evaluation gave none: how far an update moves the centroid when the surfaces tilt.
-    #[cfg_attr(feature = "checkpoint", serde(default = "zero_matrix"))]
-    pub spread: Matrix,
-}
-
-/// The zero matrix (a checkpoint written before [`Reference::spread`] existed has no tilt
-/// response).
-#[cfg(feature = "checkpoint")]
-fn zero_matrix() -> Matrix {
-    Matrix::ZERO
+    /// The overlap's footprint (B's frame; see [`OverlapGeometry::footprint`]), where the
+    /// evaluation gave one: how an update moves the centroid when the surfaces tilt.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    pub footprint: Option<Footprint>,
 }
 
 impl Reference {
@@ -146,16 +139,13 @@ impl Reference {
         // A rotation by θ moves a point at distance r by its chord 2 r sin(θ/2) = 2 r |q_xyz|.
         let chord = 2.0 * Vector::new(q.x, q.y, q.z).length();
         let shift = motion.transform_point(self.contact_point) - self.contact_point;
-        let deepening = self.deepening(&motion);
         let across = (shift - self.normal * shift.dot(self.normal)).length();
-        let contact_point = self.moved_contact_point(&motion);
-        let gradients = surface_gradients(shapes, relative, contact_point);
         // The local indentation changes by the approach plus the tilt of the surfaces across
         // the overlap: how far their normals at the contact point turned against each other
         // (not when both turn alike, as in B's frame under a spinning B, nor for a ball
         // spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels across the
         // grid by the shift plus the roll.
-        let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
+        let (deepening, turned, contact_point, gradients) = self.approach(shapes, relative);
         let (tilted, weight) = match self.tilted(turned, deepening) {
             Some(t) => (t, TILT_WEIGHT),
             None => (Tilt { volume: 0.0, shift: Vector::ZERO }, FROZEN_TILT),
@@ -188,7 +178,6 @@ impl Reference {
             return None;
         }
         let contact_point = contact_point + tilted.shift;
-        let to_world = Matrix::from_quat(pose_b.rotation);
         Some(OverlapGeometry {
             volume,
             contact_point: pose_b.transform_point(contact_point),
@@ -196,43 +185,67 @@ impl Reference {
             indentation: self.indentation * ratio,
             surface_area: self.surface_area * ratio.powf(p - 1.0),
             corrected_box,
-            spread: Some(to_world * self.spread * to_world.transpose()),
+            footprint: self.footprint.map(|f| f.transformed(pose_b)),
         })
     }
 
     /// The first-order effect of a tilt on an overlap between two nearly parallel surfaces
-    /// (`None` for others: an edge, a corner, faces at an angle): `turned`, how far the bodies' summed
+    /// (`None` for others, or without a footprint): `turned`, how far the bodies' summed
     /// distance gradients at the contact point turned since this reference, is the change of
     /// the overlap's depth gradient across the contact plane (its in-plane part `t`: the depth
-    /// at an in-plane offset `u` from the centroid changes by `−t·u`); `approach` is the ball
-    /// rule's approach of A's `motion` (see [`deepening`](Self::deepening)).
+    /// at an in-plane offset `u` from the centroid changes by `−t·u`); `approach` is the
+    /// approach at the contact point ([`approach`](Self::approach)).
     ///
-    /// Over a footprint of area `A` that stays put (a face on a face) with second moment
-    /// `J = ∫ u uᵀ dA` about the centroid, the centroid moves by `(δa S₁ − J t)/V` and the
-    /// volume changes by `−t·S₁`, where `δa` is the approach at the centroid and `S₁ = ∫ u dA`.
-    /// The volume's in-plane spread `C = ∫ u uᵀ d(u) dA` is `J` times the mean depth `d/p`
-    /// (`A = dV/dd = pV/d` by the volume law), and a depth `d(u) = d − g·u` (`g` the in-plane
-    /// gradient sum at the reference) puts the footprint's centre at `S₁ = J g/d` from the
-    /// centroid. `δa` is the ball rule's approach (at A's centre: a face turned about a centre
-    /// not above the centroid approaches there by `t·(c_A − x_c)` more, left to the allowance:
-    /// the volume law's rate is measured against the ball rule's approach). Otherwise exact to
-    /// first order in the tilt for a face on a face; for a cap an estimate within the allowances (round bodies
-    /// rolling on each other do not turn their gradients: no change). Where the faces meet at a
-    /// small angle the footprint ends where the depth does, so its change is of second order
-    /// too. The surfaces count as nearly parallel while `|g| ≤` [`PARALLEL`]; between an edge
-    /// or a corner and a face, `g` is no depth gradient (the gradient inside a body near its
-    /// edge is a face's normal).
+    /// Over the footprint (area `A`, centroid `c`, second moment `J₀`), which stays put for a
+    /// face on a face, the centroid moves by `(δa S₁ − J t)/V` and the volume changes by
+    /// `−t·S₁`, with `S₁ = A (c − x_c)`, `J = J₀ + A (c − x_c)(c − x_c)ᵀ` about the centroid
+    /// `x_c` and `δa` the approach there. Exact to first order in the tilt for a face on a
+    /// face; where faces meet at a small angle the footprint ends where the depth does, so its
+    /// change is of second order too; round bodies rolling on each other do not turn their
+    /// gradients (no change). The surfaces count as nearly parallel while the in-plane part of the gradient sum at the
+    /// reference is at most [`PARALLEL`]; between an edge or a corner and a face it is no depth
+    /// gradient (the gradient inside a body near its edge is a face's normal).
     fn tilted(&self, turned: Vector, approach: Real) -> Option<Tilt> {
         let n = self.normal;
         let across = |v: Vector| v - n * n.dot(v);
-        let (t, g) = (across(turned), across(self.gradients[0] + self.gradients[1]));
-        let d = self.indentation;
-        if g.length() > PARALLEL {
+        if !self.parallel() {
             return None;
         }
-        let j = self.spread * (self.exponent / d);
-        let s1 = j * g / d;
-        Some(Tilt { volume: -t.dot(s1), shift: across(s1 * approach - j * t) / self.volume })
+        let f = self.footprint?;
+        let (t, offset) = (across(turned), across(f.centroid - self.contact_point));
+        let s1 = offset * f.area;
+        let j_t = f.spread * t + offset * (f.area * offset.dot(t));
+        Some(Tilt { volume: -t.dot(s1), shift: across(s1 * approach - j_t) / self.volume })
+    }
+
+    /// The approach at the contact point since this reference, for A now at `relative` (m),
+    /// with how far the summed gradients turned there, the moved contact point (B's frame) and
+    /// the gradients. The ball rule ([`deepening`](Self::deepening)) measures the approach at
+    /// A's centre; between nearly parallel surfaces a tilt `t` (the turn's in-plane part) adds
+    /// `t·(c_A − x_c)` at the contact point, where a face turned about A's centre approaches.
+    fn approach<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        shapes: (&A, &B),
+        relative: &Pose,
+    ) -> (Real, Vector, Vector, [Vector; 2]) {
+        let motion = self.motion_since(relative);
+        let contact_point = self.moved_contact_point(&motion);
+        let gradients = surface_gradients(shapes, relative, contact_point);
+        let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
+        let n = self.normal;
+        let across = |v: Vector| v - n * n.dot(v);
+        let mut approach = self.deepening(&motion);
+        if self.radii[0].is_finite() && self.parallel() {
+            approach += across(turned).dot(self.centre_a(&motion).0 - self.contact_point);
+        }
+        (approach, turned, contact_point, gradients)
+    }
+
+    /// Whether the surfaces at the contact point are nearly parallel (the in-plane part of the
+    /// summed gradients at most [`PARALLEL`]).
+    fn parallel(&self) -> bool {
+        let (n, g) = (self.normal, self.gradients[0] + self.gradients[1]);
+        (g - n * n.dot(g)).length() <= PARALLEL
     }
 
     /// A's motion in B's frame since this reference, for A now at `relative`.
@@ -294,13 +307,12 @@ fn surface_gradients<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     [relative.rotation * a.gradient(relative.inverse_transform_point(x)), b.gradient(x)]
 }
 
-/// How much more a tilt counts than an approach against the normal allowance. An update
-/// moves the centroid as a tilt does to first order ([`Reference::tilted`]: the restoring
-/// torque of a rocking body follows the rocking), but not what grows with the tilt's square;
-/// where a full evaluation then corrects the force by a jump, a box at rest on a slope is
-/// nudged at every one and creeps down (`tests/friction.rs` with a weight of 2, the
-/// `stability_report` ramp with 1).
-const TILT_WEIGHT: Real = 4.0;
+/// How much more a tilt counts than an approach against the normal allowance between nearly
+/// parallel surfaces. An update moves the centroid and the volume as a tilt does to first
+/// order ([`Reference::tilted`]: the restoring torque of a rocking body follows the rocking),
+/// not what grows with the tilt's square; where a full evaluation corrects the force by a
+/// jump, a body at rest on a slope is nudged at every one.
+const TILT_WEIGHT: Real = 2.0;
 
 /// [`TILT_WEIGHT`] where an update cannot follow the tilt ([`Reference::tilted`] gives
 /// `None`): the centroid stays, so the restoring torque lags the rocking unless the tilt is
@@ -315,14 +327,19 @@ const PARALLEL: Real = 0.1;
 /// close to measure the volume law by their secants (the last law is kept).
 const MIN_LOG_INDENTATION_STEP: Real = 0.05;
 
-/// The volume law at the full evaluation `g` (A at `relative` in B's frame): the exponent `p`
-/// of `V ∝ d^p`, within [1, 3] (a punch's 1, a cap's or an edge's 2, a corner's 3), and the
-/// indentation's rate against the approach, `dd/dδ` within [0.05, 1] (1 where the deepest
+/// The volume law at the full evaluation `g`: the exponent `p` of `V ∝ d^p`, within [1, 3] (a
+/// punch's 1, a cap's or an edge's 2, a corner's 3), and the indentation's rate against the
+/// approach at the contact point since `previous` (`approach`, see [`Reference::approach`]),
+/// `dd/dδ` within [0.05, 1] (1 where the deepest
 /// point lies under the centroid, as for caps and punches; less for a tilted corner). Both
 /// are secants from the `previous` full evaluation of the same contact where the indentation
 /// changed enough between them, else the previous law; at first touch the overlap's shape
 /// measure [`volume_exponent`](crate::force::volume_exponent) and a rate of 1.
-fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry) -> (Real, Real) {
+fn volume_law(
+    previous: Option<&Reference>,
+    approach: impl FnOnce(&Reference) -> Real,
+    g: &OverlapGeometry,
+) -> (Real, Real) {
     let Some(r) = previous else {
         return (
             crate::force::volume_exponent(g.volume, g.indentation, g.surface_area).clamp(1.0, 3.0),
@@ -331,7 +348,7 @@ fn volume_law(previous: Option<&Reference>, relative: &Pose, g: &OverlapGeometry
     };
     let step = (g.indentation / r.indentation).ln();
     let exponent = (g.volume / r.volume).ln() / step;
-    let rate = (g.indentation - r.indentation) / r.deepening(&r.motion_since(relative));
+    let rate = (g.indentation - r.indentation) / approach(r);
     if step.abs() >= MIN_LOG_INDENTATION_STEP && exponent.is_finite() && rate.is_finite() {
         (exponent.clamp(1.0, 3.0), rate.clamp(0.05, 1.0))
     } else {
@@ -396,11 +413,11 @@ impl ContactModel {
     /// With geometry reuse at `fraction` (`0 <= fraction <= 100`; 0 turns reuse off): between
     /// full evaluations a live contact's geometry is updated from the pair's relative motion
     /// (see the module docs) while
-    /// - its local indentation changes by at most `fraction × d` — the approach along the
-    ///   normal plus four times the tilt across the overlap (how far the surfaces' normals at
-    ///   the contact point turned, times the corrected box's diagonal; eight times where the
-    ///   surfaces meet at an angle: an update moves the centroid as a tilt does only between
-    ///   nearly parallel surfaces, and only to first order), and
+    /// - its local indentation changes by at most `fraction × d` — the approach at the
+    ///   contact point plus twice the tilt across the overlap (how far the surfaces' normals
+    ///   at the contact point turned, times the corrected box's diagonal; eight times where
+    ///   the surfaces meet at an angle: an update follows a tilt only between nearly parallel
+    ///   surfaces, and only to first order), and
     /// - A's material point at the contact travels across the grid by at most
     ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
     ///   the roll's chord at the nearer body's bounding-sphere centre.
@@ -521,7 +538,8 @@ impl ContactModel {
     ) -> Reference {
         let sides = g.corrected_box.maxs - g.corrected_box.mins;
         let reach = sides.length();
-        let (exponent, depth_rate) = volume_law(previous, &relative, g);
+        let (exponent, depth_rate) =
+            volume_law(previous, |r| r.approach((a.shape, b.shape), &relative).0, g);
         let contact_point = b.pose.inverse_transform_point(g.contact_point);
         let normal = b.pose.rotation.inverse() * g.normal;
         // Each body's bounding-sphere centre (its own frame), and its distance from the contact
@@ -552,10 +570,7 @@ impl ContactModel {
             reach,
             lever: r_a.min(r_b).max(reach),
             cell: sides.max_element() / self.settings.n_c() as Real,
-            spread: g.spread.map_or(Matrix::ZERO, |c| {
-                let to_b = Matrix::from_quat(b.pose.rotation.inverse());
-                to_b * c * to_b.transpose()
-            }),
+            footprint: g.footprint.map(|f| f.transformed(&b.pose.inverse())),
         }
     }
 }

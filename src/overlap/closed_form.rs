@@ -96,7 +96,7 @@ fn lens(ca: Vector, a: Real, cb: Vector, b: Real, pose_b: &Pose) -> Exact {
         indentation: s,
         surface_area: 2.0 * PI * (a * ha + b * hb),
         corrected_box: sphere_box(contact_point, a.min(b), pose_b),
-        spread: None,
+        footprint: None,
     };
     decided(volume, geometry)
 }
@@ -128,7 +128,7 @@ fn cap_on_plane(
         indentation: h,
         surface_area: 2.0 * PI * r * h + PI * h * (2.0 * r - h),
         corrected_box: sphere_box(contact_point, r, pose_b),
-        spread: None,
+        footprint: None,
     };
     decided(volume, geometry)
 }

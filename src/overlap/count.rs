@@ -1,6 +1,6 @@
 //! The paper's integration (Marquardt et al. §3.3.3): count the grid nodes inside both bodies.
 
-use super::spread::Spread;
+use super::footprint;
 use super::{Grid, Integral, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
@@ -26,7 +26,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     };
     let mut count = 0usize;
     let mut sum = Vector::ZERO;
-    let mut second = Spread::default();
+    let mut footprint = footprint::Sums::default();
     let mut normal = Vector::ZERO;
     let mut area = 0.0;
     let h = grid.h;
@@ -40,7 +40,6 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     if in_box(i) && in_box(j) && in_box(k) {
                         count += 1;
                         sum += grid.node(i, j, k);
-                        second.add_box(grid.node(i, j, k), h, cell);
                     }
                     continue;
                 }
@@ -77,6 +76,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     let a_i = face_area.dot(g * g);
                     normal += g * (sign * a_i);
                     area += a_i;
+                    footprint.add(x, h, 0.5 * a_i);
                 }
             }
         }
@@ -86,7 +86,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     Integral {
         volume,
         centroid,
-        spread: second.central(volume, centroid),
+        footprint: footprint.finish(),
         normal,
         surface_area: area,
         bounds: None,

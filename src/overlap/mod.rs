@@ -35,8 +35,9 @@ mod closed_form;
 mod correction;
 mod count;
 mod crease;
+mod footprint;
 mod polyhedra;
-mod spread;
+pub use footprint::Footprint;
 mod subcell;
 
 use parry3d_f64::bounding_volume::Aabb;
@@ -169,11 +170,10 @@ pub struct OverlapGeometry {
     /// bounds the pair tighter; B's for the closed-form spheres): pass it back as
     /// `previous_box` next sub-step.
     pub corrected_box: Aabb,
-    /// The overlap's spread, the central second moment of its volume `∫ (x − x_c)(x − x_c)ᵀ dV`
-    /// (m⁵, world axes), where the grid integrated it; `None` from the closed-form spheres and
-    /// the exact polyhedra. Across the contact plane it measures how far the overlap reaches:
-    /// how much its centroid moves when the surfaces tilt against each other.
-    pub spread: Option<Matrix>,
+    /// The overlap's footprint (world frame): the area where the surfaces meet, its centroid
+    /// and second moment of area — how the overlap changes when the surfaces tilt against
+    /// each other. From the grid; `None` from the closed-form spheres and the exact polyhedra.
+    pub footprint: Option<Footprint>,
 }
 
 /// A body's SDF placed in the pair's frame (A's or B's body frame): `d(x) = sdf(R^T (x - t)) - ε`.
@@ -467,6 +467,9 @@ fn blended_normal(area_vectors: [Vector; 2], areas: [Real; 2]) -> Vector {
 }
 
 /// What an exact form (closed-form spheres, clipped polyhedra) says of a pair.
+// Returned by value once per evaluation and unpacked at once: boxing the large variant would
+// allocate on every evaluation.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Exact {
     /// They overlap: the overlap's geometry.
     Overlap(OverlapGeometry),
@@ -483,8 +486,8 @@ pub(crate) struct Integral {
     /// Un-normalised B→A normal (zero when the grid saw no surface).
     normal: Vector,
     surface_area: Real,
-    /// Central second moment of the volume, `∫ (x − c)(x − c)ᵀ dV` (pair frame).
-    spread: Matrix,
+    /// The footprint (pair frame).
+    footprint: Option<Footprint>,
     /// Box of the integrated pieces (sub-cell mode; `None` for counting).
     bounds: Option<Aabb>,
 }
@@ -587,10 +590,7 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let to_world = |g: OverlapGeometry| OverlapGeometry {
         contact_point: frame.transform_point(g.contact_point),
         normal: frame.rotation * g.normal,
-        spread: g.spread.map(|c| {
-            let r = Matrix::from_quat(frame.rotation);
-            r * c * r.transpose()
-        }),
+        footprint: g.footprint.map(|f| f.transformed(&frame)),
         ..g
     };
     if settings.exact_polyhedra {
@@ -875,7 +875,7 @@ fn finish<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         indentation,
         surface_area: integral.surface_area,
         corrected_box,
-        spread: Some(integral.spread),
+        footprint: integral.footprint,
     })
 }
 

@@ -20,7 +20,6 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
-use super::spread::Spread;
 use super::{blended_normal, Exact, OverlapGeometry, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
@@ -91,7 +90,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     };
     let count: usize = faces.iter().map(|f| f.verts.len()).sum();
     let inner = faces.iter().flat_map(|f| f.verts.iter().copied()).sum::<Vector>() / count as Real;
-    let (mut volume, mut moment, mut second) = (0.0, Vector::ZERO, Spread::default());
+    let (mut volume, mut moment) = (0.0, Vector::ZERO);
     let (mut area_vec, mut area) = ([Vector::ZERO; 2], [0.0; 2]);
     let (mut lo, mut hi) = (Vector::splat(Real::INFINITY), Vector::splat(Real::NEG_INFINITY));
     for f in &faces {
@@ -101,7 +100,6 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             let v = (p[0] - inner).dot((p[i] - inner).cross(p[i + 1] - inner)).abs() / 6.0;
             volume += v;
             moment += (inner + p[0] + p[i] + p[i + 1]) * (0.25 * v);
-            second.add_tetrahedron([inner, p[0], p[i], p[i + 1]], v);
             a += 0.5 * (p[i] - p[0]).cross(p[i + 1] - p[0]).length();
         }
         let Some(body) = f.body else { return Exact::Uncovered };
@@ -143,7 +141,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         indentation,
         surface_area: area[0] + area[1],
         corrected_box: Aabb::new(lo, hi),
-        spread: Some(second.central(volume, centroid)),
+        footprint: None,
     })
 }
 

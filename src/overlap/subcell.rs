@@ -38,7 +38,7 @@
 use parry3d_f64::bounding_volume::Aabb;
 
 use super::crease::{self, Plane};
-use super::spread::Spread;
+use super::footprint;
 use super::{blended_normal, crossing, Grid, Integral, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
@@ -254,7 +254,7 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
 struct Sums {
     volume: Real,
     moment: Vector,
-    second: Spread,
+    footprint: footprint::Sums,
     /// Area vectors of A's facets (oriented out of A) and of B's (out of B) and their areas.
     normal: [Vector; 2],
     area: [Real; 2],
@@ -576,7 +576,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let sums = Sums {
         volume: 0.0,
         moment: Vector::ZERO,
-        second: Spread::default(),
+        footprint: footprint::Sums::default(),
         normal: [Vector::ZERO; 2],
         area: [0.0; 2],
         lo: inf,
@@ -639,7 +639,6 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     let it = &mut cutter.sums;
                     it.volume += cell;
                     it.moment += (origin + h * 0.5) * cell;
-                    it.second.add_box(origin + h * 0.5, h, cell);
                     it.lo = it.lo.min(origin);
                     it.hi = it.hi.max(origin + h);
                     continue;
@@ -653,7 +652,11 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                         key: Vert::node_key(node as u32),
                     }
                 });
-                let (volume, moment) = (cutter.sums.volume, cutter.sums.moment);
+                let (volume, moment, area) = (
+                    cutter.sums.volume,
+                    cutter.sums.moment,
+                    cutter.sums.area[0] + cutter.sums.area[1],
+                );
                 // Every surface that may pass through the cell is a polyhedron's: the cell
                 // clipped by their faces is the overlap in it, exactly.
                 let clipped = (in_a == 0xFF || polyhedral[0])
@@ -663,13 +666,13 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     cutter.memo_len = 0;
                     cutter.cell(&corners, h, [in_a, in_b]);
                 }
-                // The spread cell by cell: the cell's part of the overlap at its centroid, with
-                // a whole cell's own spread (within (h/w)² of the spread's, w the overlap's
-                // size, and far cheaper than piece by piece).
-                let part = cutter.sums.volume - volume;
-                if part > 0.0 {
-                    let it = &mut cutter.sums;
-                    it.second.add_box((it.moment - moment) / part, h, part);
+                // The footprint cell by cell: the cell's facets at the centroid of its part of
+                // the overlap.
+                let it = &mut cutter.sums;
+                let part = it.volume - volume;
+                let facets = 0.5 * (it.area[0] + it.area[1] - area);
+                if part > 0.0 && facets > 0.0 {
+                    it.footprint.add((it.moment - moment) / part, h, facets);
                 }
             }
         }
@@ -681,7 +684,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     Integral {
         volume: it.volume,
         centroid,
-        spread: it.second.central(it.volume, centroid),
+        footprint: it.footprint.finish(),
         // B's outward normal points from B to A, A's from A to B: both B→A as `n_B − n_A`.
         normal: blended_normal(it.normal, it.area),
         surface_area: it.area[0] + it.area[1],
