@@ -139,7 +139,7 @@ impl Reference {
         // A rotation by θ moves a point at distance r by its chord 2 r sin(θ/2) = 2 r |q_xyz|.
         let chord = 2.0 * Vector::new(q.x, q.y, q.z).length();
         let shift = motion.transform_point(self.contact_point) - self.contact_point;
-        let across = (shift - self.normal * shift.dot(self.normal)).length();
+        let across = self.in_plane(shift).length();
         // The local indentation changes by the approach plus the tilt of the surfaces across
         // the overlap: how far their normals at the contact point turned against each other
         // (not when both turn alike, as in B's frame under a spinning B, nor for a ball
@@ -206,16 +206,14 @@ impl Reference {
     /// reference is at most [`PARALLEL`]; between an edge or a corner and a face it is no depth
     /// gradient (the gradient inside a body near its edge is a face's normal).
     fn tilted(&self, turned: Vector, approach: Real) -> Option<Tilt> {
-        let n = self.normal;
-        let across = |v: Vector| v - n * n.dot(v);
         if !self.parallel() {
             return None;
         }
         let f = self.footprint?;
-        let (t, offset) = (across(turned), across(f.centroid - self.contact_point));
+        let (t, offset) = (self.in_plane(turned), self.in_plane(f.centroid - self.contact_point));
         let s1 = offset * f.area;
         let j_t = f.spread * t + offset * (f.area * offset.dot(t));
-        Some(Tilt { volume: -t.dot(s1), shift: across(s1 * approach - j_t) / self.volume })
+        Some(Tilt { volume: -t.dot(s1), shift: self.in_plane(s1 * approach - j_t) / self.volume })
     }
 
     /// The approach at the contact point since this reference, for A now at `relative` (m),
@@ -232,11 +230,9 @@ impl Reference {
         let contact_point = self.moved_contact_point(&motion);
         let gradients = surface_gradients(shapes, relative, contact_point);
         let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
-        let n = self.normal;
-        let across = |v: Vector| v - n * n.dot(v);
         let mut approach = self.deepening(&motion);
         if self.radii[0].is_finite() && self.parallel() {
-            approach += across(turned).dot(self.centre_a(&motion).0 - self.contact_point);
+            approach += self.in_plane(turned).dot(self.centre_a(&motion).0 - self.contact_point);
         }
         (approach, turned, contact_point, gradients)
     }
@@ -244,8 +240,12 @@ impl Reference {
     /// Whether the surfaces at the contact point are nearly parallel (the in-plane part of the
     /// summed gradients at most [`PARALLEL`]).
     fn parallel(&self) -> bool {
-        let (n, g) = (self.normal, self.gradients[0] + self.gradients[1]);
-        (g - n * n.dot(g)).length() <= PARALLEL
+        self.in_plane(self.gradients[0] + self.gradients[1]).length() <= PARALLEL
+    }
+
+    /// The part of `v` in the contact plane (normal to [`normal`](Self::normal)).
+    fn in_plane(&self, v: Vector) -> Vector {
+        v - self.normal * self.normal.dot(v)
     }
 
     /// A's motion in B's frame since this reference, for A now at `relative`.

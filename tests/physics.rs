@@ -375,8 +375,8 @@ fn geometry_reuse_keeps_impacts_as_full_evaluation_gives_them() {
 /// point across the face as the overlap's uneven depth moves its centroid, so the restoring
 /// torque of a rocking body follows the rocking without a full evaluation (a cube pressed
 /// 20 µm into the floor, turned by up to 0.08 mrad about its centre: the centroid moves by
-/// up to 0.04 mm). The updated contact point and the torque about the cube's centre agree with a
-/// full evaluation's within 5 % of what the tilt changed.
+/// up to 0.04 mm). The updated contact point and the torque about the cube's centre agree
+/// with a full evaluation's within 5 % of what the tilt changed.
 #[test]
 fn geometry_reuse_moves_the_contact_point_as_a_tilt_does() {
     let mat = Material::new(5e8, 0.35).unwrap();
