@@ -371,6 +371,105 @@ fn geometry_reuse_keeps_impacts_as_full_evaluation_gives_them() {
     }
 }
 
+/// A cube (half side `r`, isotropic inertia `2 m r²/3`) dropped at 1 m/s and spinning at
+/// `spin` on a wall from `rotation`, integrated with velocity Verlet for its translation and
+/// rotation through the contact by `model`: (velocity, angular velocity, peak normal force,
+/// full evaluations, all evaluations) after the contact.
+fn tumble_on_wall(
+    model: &ContactModel,
+    r: f64,
+    rotation: Rotation,
+    spin: Vector,
+    mass: f64,
+) -> (Vector, Vector, f64, usize, usize) {
+    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
+    let inertia = 2.0 / 3.0 * mass * r * r;
+    let lowest = (0..8)
+        .map(|i| -(rotation * Vector::new([-r, r][i & 1], [-r, r][(i >> 1) & 1], [-r, r][i >> 2])).y)
+        .fold(0.0, f64::max);
+    let (mut x, mut q, mut v, mut w) = (Vector::new(0.0, lowest + 1e-7, 0.0), rotation, -Vector::Y, spin);
+    let dt = 2e-7;
+    let (mut state, mut peak, mut full, mut all) = (None, 0.0f64, 0, 0);
+    let mut load = |x: Vector, q: Rotation, v: Vector, w: Vector, state: &mut Option<ContactState>| {
+        let body = BodyState::at_rest(&cube, Pose::from_parts(x, q)).moving(v, w);
+        let out = model.evaluate(&body, &wall, state).unwrap();
+        if let Some(o) = &out {
+            (peak, full, all) = (peak.max(o.force.normal_force), full + usize::from(o.full), all + 1);
+        }
+        out.map_or((Vector::ZERO, Vector::ZERO), |o| (o.force.force_on_a, o.force.torque_on_a))
+    };
+    let (mut f, mut t) = load(x, q, v, w, &mut state);
+    let mut touched = false;
+    for _ in 0..100_000 {
+        let (v_half, w_half) = (v + f * (0.5 * dt / mass), w + t * (0.5 * dt / inertia));
+        x += v_half * dt;
+        q = (Rotation::from_scaled_axis(w_half * dt) * q).normalize();
+        (f, t) = load(x, q, v_half, w_half, &mut state);
+        (v, w) = (v_half + f * (0.5 * dt / mass), w_half + t * (0.5 * dt / inertia));
+        touched |= state.is_some();
+        if touched && state.is_none() {
+            break;
+        }
+    }
+    assert!(touched && state.is_none(), "contact did not end");
+    (v, w, peak, full, all)
+}
+
+/// Geometry reuse keeps a spinning cube's impact on an edge or a corner as full evaluation
+/// gives it while the cube turns during the contact: the rebound velocity and the peak force
+/// within 1 % (of the velocity change and of the peak), the spin within 2 % of its change;
+/// set far too loose (100× the default allowance), some impact leaves these bounds.
+#[test]
+fn geometry_reuse_keeps_a_spinning_cubes_impact_as_full_evaluation_gives_it() {
+    let mat = Material::new(5e8, 0.35).unwrap();
+    let model = |reuse: f64| {
+        ContactModel::new(
+            PairParameters::new(&mat, &mat, 0.8).unwrap(),
+            settings(6, IntegrationMode::Subcell),
+        )
+        .with_geometry_reuse(reuse)
+        .unwrap()
+    };
+    let r: f64 = 0.005;
+    let mass = 7800.0 * 8.0 * r.powi(3);
+    let edge_down = Rotation::from_rotation_x(0.02) * Rotation::from_rotation_z(0.8);
+    let corner_down =
+        Rotation::from_rotation_arc(Vector::new(1.0, 1.2, 0.9).normalize(), -Vector::Y);
+    let cases = [
+        ("edge, spinning about it", edge_down, Vector::new(0.0, 0.0, 60.0)),
+        ("edge, spinning across it", edge_down, Vector::new(60.0, 10.0, 0.0)),
+        ("corner, tumbling", corner_down, Vector::new(40.0, -20.0, 50.0)),
+    ];
+    let mut loose_shows = false;
+    for (name, rotation, spin) in cases {
+        let reference = tumble_on_wall(&model(0.0), r, rotation, spin, mass);
+        let (dv, dw) = (reference.0 + Vector::Y, reference.1 - spin);
+        let errors = |run: &(Vector, Vector, f64, usize, usize)| {
+            (
+                (run.0 - reference.0).length() / dv.length(),
+                (run.1 - reference.1).length() / dw.length(),
+                (run.2 / reference.2 - 1.0).abs(),
+            )
+        };
+        let within = |(e_v, e_w, e_f): (f64, f64, f64)| e_v < 0.01 && e_w < 0.02 && e_f < 0.01;
+        let reuse = discrete_contact::contact::GEOMETRY_REUSE;
+        let reused = tumble_on_wall(&model(reuse), r, rotation, spin, mass);
+        let loose = tumble_on_wall(&model(100.0 * reuse), r, rotation, spin, mass);
+        let (e, l) = (errors(&reused), errors(&loose));
+        println!(
+            "{name}: errors (velocity, spin, peak) {e:.4?}, full evaluations {} of {}; far too loose {l:.4?}",
+            reused.3, reused.4
+        );
+        assert_eq!(reference.3, reference.4, "reuse off evaluates in full every time");
+        assert!(within(e), "{name}: errors (velocity, spin, peak force) {e:.4?}");
+        assert!(reused.3 * 2 < reused.4, "{name}: reuse skipped too few full evaluations");
+        loose_shows |= !within(l);
+    }
+    assert!(loose_shows, "a far too loose bound must show");
+}
+
 /// A face resting on a face, rocked: the updates between full evaluations move the contact
 /// point across the face as the overlap's uneven depth moves its centroid, so the restoring
 /// torque of a rocking body follows the rocking without a full evaluation (a cube pressed
