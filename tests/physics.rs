@@ -387,19 +387,24 @@ fn tumble_on_wall(
     let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
     let inertia = 2.0 / 3.0 * mass * r * r;
     let lowest = (0..8)
-        .map(|i| -(rotation * Vector::new([-r, r][i & 1], [-r, r][(i >> 1) & 1], [-r, r][i >> 2])).y)
+        .map(|i| {
+            -(rotation * Vector::new([-r, r][i & 1], [-r, r][(i >> 1) & 1], [-r, r][i >> 2])).y
+        })
         .fold(0.0, f64::max);
-    let (mut x, mut q, mut v, mut w) = (Vector::new(0.0, lowest + 1e-7, 0.0), rotation, -Vector::Y, spin);
+    let (mut x, mut q, mut v, mut w) =
+        (Vector::new(0.0, lowest + 1e-7, 0.0), rotation, -Vector::Y, spin);
     let dt = 2e-7;
     let (mut state, mut peak, mut full, mut all) = (None, 0.0f64, 0, 0);
-    let mut load = |x: Vector, q: Rotation, v: Vector, w: Vector, state: &mut Option<ContactState>| {
-        let body = BodyState::at_rest(&cube, Pose::from_parts(x, q)).moving(v, w);
-        let out = model.evaluate(&body, &wall, state).unwrap();
-        if let Some(o) = &out {
-            (peak, full, all) = (peak.max(o.force.normal_force), full + usize::from(o.full), all + 1);
-        }
-        out.map_or((Vector::ZERO, Vector::ZERO), |o| (o.force.force_on_a, o.force.torque_on_a))
-    };
+    let mut load =
+        |x: Vector, q: Rotation, v: Vector, w: Vector, state: &mut Option<ContactState>| {
+            let body = BodyState::at_rest(&cube, Pose::from_parts(x, q)).moving(v, w);
+            let out = model.evaluate(&body, &wall, state).unwrap();
+            if let Some(o) = &out {
+                (peak, full, all) =
+                    (peak.max(o.force.normal_force), full + usize::from(o.full), all + 1);
+            }
+            out.map_or((Vector::ZERO, Vector::ZERO), |o| (o.force.force_on_a, o.force.torque_on_a))
+        };
     let (mut f, mut t) = load(x, q, v, w, &mut state);
     let mut touched = false;
     for _ in 0..100_000 {

@@ -35,6 +35,17 @@ pub(super) const MAX_PLANES: usize = 64;
 /// Faces at most: the cell's six and one per plane.
 const MAX_FACES: usize = 6 + MAX_PLANES;
 
+/// Vertices a polyhedron's buffer holds: a clip of one within the limits adds at most one
+/// per edge cut (`MAX_VERTS / 2` edges at most).
+const CAP_VERTS: usize = MAX_VERTS + MAX_VERTS / 2 + 8;
+
+/// Index entries a polyhedron's buffer holds: the clipped faces gain at most one each, and
+/// the cap takes at most one per vertex.
+const CAP_INDEX: usize = MAX_VERTS + MAX_FACES + CAP_VERTS + 8;
+
+/// Faces a polyhedron's buffer holds: the clipped ones and the cap.
+const CAP_FACES: usize = MAX_FACES + 1;
+
 /// No vertex: a vertex the clip cut off.
 const GONE: u16 = u16::MAX;
 
@@ -61,26 +72,68 @@ struct Face {
 /// vertex is stored once, so a clip measures it against the plane once, cuts each edge once
 /// (both faces of the edge share the new vertex) and chains the cap from the faces' cut edges
 /// instead of sorting its points by angle.
+///
+/// Fixed buffers with their lengths beside them: a clip keeps the lengths in locals while it
+/// writes (a `Vec`'s length and capacity would be reloaded and stored at every push).
 struct Poly {
-    verts: Vec<Vector>,
-    index: Vec<u16>,
-    faces: Vec<Face>,
+    verts: [Vector; CAP_VERTS],
+    nv: usize,
+    index: [u16; CAP_INDEX],
+    ni: usize,
+    faces: [Face; CAP_FACES],
+    nf: usize,
+}
+
+impl Poly {
+    const EMPTY: Self = Self {
+        verts: [Vector::ZERO; CAP_VERTS],
+        nv: 0,
+        index: [0; CAP_INDEX],
+        ni: 0,
+        faces: [Face { start: 0, len: 0, body: None, normal: Vector::ZERO }; CAP_FACES],
+        nf: 0,
+    };
+
+    fn verts(&self) -> &[Vector] {
+        &self.verts[..self.nv]
+    }
+
+    fn faces(&self) -> &[Face] {
+        &self.faces[..self.nf]
+    }
+
+    fn clear(&mut self) {
+        (self.nv, self.ni, self.nf) = (0, 0, 0);
+    }
+}
+
+/// Appends `value` to `buf`, whose length is `len`; `None` when it is full.
+#[inline(always)]
+fn push<T, const N: usize>(buf: &mut [T; N], len: &mut usize, value: T) -> Option<()> {
+    *buf.get_mut(*len)? = value;
+    *len += 1;
+    Some(())
+}
+
+/// What a clip measures and links per vertex and per face, kept between cells.
+struct Links {
+    /// Each vertex's signed distance from the plane being clipped.
+    sides: [Real; CAP_VERTS],
+    /// Each vertex's index in the clipped polyhedron, or [`GONE`].
+    kept: [u16; CAP_VERTS],
+    /// The edges cut by the plane (their ends' indices, the lower first) and the new vertex.
+    cut_edges: [(u16, u16, u16); CAP_VERTS],
+    /// Per vertex of the clipped polyhedron: whether it lies on the plane.
+    on_plane: [bool; CAP_VERTS],
+    /// The cap's edges, one per clipped face, in the cap's order about the plane's normal.
+    cap_edges: [(u16, u16); CAP_FACES],
 }
 
 /// Buffers for clipping, kept between cells (two polyhedra: the clip reads one, writes the
 /// other).
 pub(super) struct Scratch {
-    polys: [Poly; 2],
-    /// Each vertex's signed distance from the plane being clipped.
-    sides: Vec<Real>,
-    /// Each vertex's index in the clipped polyhedron, or [`GONE`].
-    kept: Vec<u16>,
-    /// The edges cut by the plane (their ends' indices, the lower first) and the new vertex.
-    cut_edges: Vec<(u16, u16, u16)>,
-    /// Per vertex of the clipped polyhedron: whether it lies on the plane.
-    on_plane: Vec<bool>,
-    /// The cap's edges, one per clipped face, in the cap's order about the plane's normal.
-    cap_edges: Vec<(u16, u16)>,
+    polys: Box<[Poly; 2]>,
+    links: Box<Links>,
     /// The cap's points when its edges do not chain (degenerate cuts).
     cap: Vec<Vector>,
     /// Which of `polys` holds the last clip's result.
@@ -95,18 +148,15 @@ pub(super) struct Scratch {
 
 impl Scratch {
     pub(super) fn new() -> Self {
-        let poly = || Poly {
-            verts: Vec::with_capacity(MAX_VERTS),
-            index: Vec::with_capacity(MAX_VERTS + MAX_FACES),
-            faces: Vec::with_capacity(MAX_FACES),
-        };
         Self {
-            polys: [poly(), poly()],
-            sides: Vec::with_capacity(MAX_VERTS),
-            kept: Vec::with_capacity(MAX_VERTS),
-            cut_edges: Vec::with_capacity(MAX_VERTS),
-            on_plane: Vec::with_capacity(MAX_VERTS + MAX_FACES),
-            cap_edges: Vec::with_capacity(MAX_FACES),
+            polys: Box::new([Poly::EMPTY, Poly::EMPTY]),
+            links: Box::new(Links {
+                sides: [0.0; CAP_VERTS],
+                kept: [0; CAP_VERTS],
+                cut_edges: [(0, 0, 0); CAP_VERTS],
+                on_plane: [false; CAP_VERTS],
+                cap_edges: [(0, 0); CAP_FACES],
+            }),
             cap: Vec::with_capacity(2 * MAX_FACES),
             current: 0,
             tol: 0.0,
@@ -119,7 +169,7 @@ impl Scratch {
     pub(super) fn gather_vertices(&mut self) {
         let Self { polys, vertices, current, .. } = self;
         vertices.clear();
-        vertices.extend_from_slice(&polys[*current].verts);
+        vertices.extend_from_slice(polys[*current].verts());
     }
 }
 
@@ -172,9 +222,7 @@ pub(super) fn clip_cell(
     scratch.current = 0;
     let poly = &mut scratch.polys[0];
     if excluded(&scratch.planes, lo, hi, 4.0 * scratch.tol) {
-        poly.verts.clear();
-        poly.index.clear();
-        poly.faces.clear();
+        poly.clear();
         return Some(integrals(poly));
     }
     cell_faces(lo, hi, poly);
@@ -245,7 +293,7 @@ pub(super) fn clip_more(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
 /// integrals of what is left (`None` as in [`clip_cell`]).
 fn clip_planes(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
     for k in from..scratch.planes.len() {
-        if scratch.polys[scratch.current].faces.is_empty() {
+        if scratch.polys[scratch.current].nf == 0 {
             break;
         }
         if clip(scratch, scratch.planes[k])? {
@@ -265,20 +313,28 @@ fn integrals(poly: &Poly) -> Clipped {
         lo: Vector::splat(Real::INFINITY),
         hi: Vector::splat(Real::NEG_INFINITY),
     };
-    if poly.faces.is_empty() {
+    if poly.nf == 0 {
         return out;
     }
-    let inner = poly.verts.iter().copied().sum::<Vector>() / poly.verts.len() as Real;
-    for f in &poly.faces {
+    let inner = poly.verts().iter().copied().sum::<Vector>() / poly.nv as Real;
+    for f in poly.faces() {
         let p = |i: usize| poly.verts[poly.index[f.start + i] as usize];
+        // A fan of triangles from the face's first vertex, each the base of a tetrahedron
+        // with its apex at `inner`; each vertex's offsets are taken once.
         let p0 = p(0);
-        let mut a = Vector::ZERO;
-        for i in 1..f.len - 1 {
-            let (p1, p2) = (p(i), p(i + 1));
-            let v = (p0 - inner).dot((p1 - inner).cross(p2 - inner)).abs() / 6.0;
+        let q0 = p0 - inner;
+        let (mut p1, mut a) = (p(1), Vector::ZERO);
+        let (mut q1, mut e1) = (p1 - inner, p1 - p0);
+        for i in 2..f.len {
+            let p2 = p(i);
+            let (q2, e2) = (p2 - inner, p2 - p0);
+            let v = q0.dot(q1.cross(q2)).abs() / 6.0;
             out.volume += v;
             out.moment += (inner + p0 + p1 + p2) * (0.25 * v);
-            a += (p1 - p0).cross(p2 - p0);
+            if f.body.is_some() {
+                a += e1.cross(e2);
+            }
+            (p1, q1, e1) = (p2, q2, e2);
         }
         if let Some(s) = f.body {
             let area = 0.5 * a.length();
@@ -286,7 +342,7 @@ fn integrals(poly: &Poly) -> Clipped {
             out.area[s] += area;
         }
     }
-    for v in &poly.verts {
+    for v in poly.verts() {
         out.lo = out.lo.min(*v);
         out.hi = out.hi.max(*v);
     }
@@ -304,49 +360,44 @@ fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
         ([0, 2, 3, 1], [0.0, 0.0, -1.0]),
         ([4, 5, 7, 6], [0.0, 0.0, 1.0]),
     ];
-    poly.verts.clear();
-    poly.index.clear();
-    poly.faces.clear();
-    poly.verts.extend((0..8).map(|c| {
-        Vector::new(
+    for c in 0..8 {
+        poly.verts[c] = Vector::new(
             if c & 1 == 0 { lo.x } else { hi.x },
             if c & 2 == 0 { lo.y } else { hi.y },
             if c & 4 == 0 { lo.z } else { hi.z },
-        )
-    }));
-    for (quad, n) in QUADS {
-        poly.faces.push(Face {
-            start: poly.index.len(),
-            len: 4,
-            body: None,
-            normal: Vector::from_array(n),
-        });
-        poly.index.extend_from_slice(&quad);
+        );
     }
+    for (k, (quad, n)) in QUADS.into_iter().enumerate() {
+        poly.faces[k] = Face { start: 4 * k, len: 4, body: None, normal: Vector::from_array(n) };
+        poly.index[4 * k..4 * k + 4].copy_from_slice(&quad);
+    }
+    (poly.nv, poly.ni, poly.nf) = (8, 24, 6);
 }
 
 /// Replaces the scratch's current polyhedron by its part with `n·x <= h`, closed by a face on
 /// the plane (written into the other polyhedron); returns `Some(false)` (and changes nothing)
 /// when the plane cuts nothing off, `None` when the result would outgrow the buffers.
 fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
-    let Scratch { polys, sides, kept, cut_edges, on_plane, cap_edges, cap, current, tol, .. } =
-        scratch;
+    let Scratch { polys, links, cap, current, tol, .. } = scratch;
+    let Links { sides, kept, cut_edges, on_plane, cap_edges } = &mut **links;
     let tol = *tol;
-    sides.clear();
     let mut beyond = false;
-    for &x in &polys[*current].verts {
-        let s = plane.n.dot(x) - plane.h;
-        let s = if s.abs() <= tol { 0.0 } else { s };
-        beyond |= s > 0.0;
-        sides.push(s);
+    {
+        let from = &polys[*current];
+        for (s, &x) in sides.iter_mut().zip(from.verts()) {
+            let d = plane.n.dot(x) - plane.h;
+            *s = if d.abs() <= tol { 0.0 } else { d };
+            beyond |= *s > 0.0;
+        }
     }
     if !beyond {
         // A face on the plane lies on that body's surface (a body's face on a node layer,
         // with the corners there outside the body: the plane was added as one that touches).
         let from = &mut polys[*current];
-        for f in &mut from.faces {
+        let Poly { index, faces, nf, .. } = from;
+        for f in &mut faces[..*nf] {
             let on = |k: &u16| sides[*k as usize] == 0.0;
-            if f.body.is_none() && from.index[f.start..f.start + f.len].iter().all(on) {
+            if f.body.is_none() && index[f.start..f.start + f.len].iter().all(on) {
                 (f.body, f.normal) = (Some(plane.body), plane.n);
             }
         }
@@ -354,27 +405,23 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
     }
     let (a, b) = polys.split_at_mut(1);
     let (from, to) = if *current == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) };
-    to.verts.clear();
-    to.index.clear();
-    to.faces.clear();
-    kept.clear();
-    on_plane.clear();
-    for (&x, &s) in from.verts.iter().zip(sides.iter()) {
-        kept.push(if s <= 0.0 {
-            to.verts.push(x);
-            on_plane.push(s == 0.0);
-            (to.verts.len() - 1) as u16
+    // The result's lengths, kept in locals while it is written.
+    let (mut nv, mut ni, mut nf) = (0, 0, 0);
+    for (k, (&x, &s)) in from.verts().iter().zip(sides.iter()).enumerate() {
+        kept[k] = if s <= 0.0 {
+            push(&mut to.verts, &mut nv, x)?;
+            on_plane[nv - 1] = s == 0.0;
+            (nv - 1) as u16
         } else {
             GONE
-        });
+        };
     }
-    cut_edges.clear();
-    cap_edges.clear();
+    let (mut n_cut, mut n_cap) = (0, 0);
     // A face whose cut leaves other than one edge on the plane (a degenerate cut, within
     // `tol`): the cap is then ordered by angle.
     let mut chained = true;
-    for f in &from.faces {
-        let start = to.index.len();
+    for f in from.faces() {
+        let start = ni;
         let idx = &from.index[f.start..f.start + f.len];
         let (mut inside, mut outside, mut touches) = (true, true, false);
         for &i in idx {
@@ -387,8 +434,10 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
             continue;
         }
         if inside {
-            to.index.extend(idx.iter().map(|&i| kept[i as usize]));
-            to.faces.push(Face { start, ..*f });
+            for &i in idx {
+                push(&mut to.index, &mut ni, kept[i as usize])?;
+            }
+            push(&mut to.faces, &mut nf, Face { start, ..*f })?;
             continue;
         }
         // Where the face leaves the half-space and where it comes back.
@@ -400,19 +449,20 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
             if (si < 0.0 && sj > 0.0) || (si > 0.0 && sj < 0.0) {
                 // Each edge is cut once, from its inside end, for both of its faces.
                 let key = (i.min(j) as u16, i.max(j) as u16);
-                let v = match cut_edges.iter().find(|e| (e.0, e.1) == key) {
+                let v = match cut_edges[..n_cut].iter().find(|e| (e.0, e.1) == key) {
                     Some(e) => e.2,
                     None => {
                         let (p, q) = if si < 0.0 { (i, j) } else { (j, i) };
                         let (xp, xq) = (from.verts[p], from.verts[q]);
-                        to.verts.push(xp + (xq - xp) * (sides[p] / (sides[p] - sides[q])));
-                        on_plane.push(true);
-                        let v = (to.verts.len() - 1) as u16;
-                        cut_edges.push((key.0, key.1, v));
+                        let x = xp + (xq - xp) * (sides[p] / (sides[p] - sides[q]));
+                        push(&mut to.verts, &mut nv, x)?;
+                        on_plane[nv - 1] = true;
+                        let v = (nv - 1) as u16;
+                        push(cut_edges, &mut n_cut, (key.0, key.1, v))?;
                         v
                     }
                 };
-                to.index.push(v);
+                push(&mut to.index, &mut ni, v)?;
                 if si < 0.0 {
                     exit = v;
                 } else {
@@ -420,30 +470,30 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
                 }
             }
             if sj <= 0.0 {
-                to.index.push(kept[j]);
+                push(&mut to.index, &mut ni, kept[j])?;
             }
             i = j;
         }
-        let len = to.index.len() - start;
+        let len = ni - start;
         if len < 3 {
-            to.index.truncate(start);
+            ni = start;
             continue;
         }
         if !touches {
             // A clean cut: its edge on the plane runs from the exit to the entry (the faces
             // are counter-clockwise about their outward normals); the cap walks it backwards.
-            cap_edges.push((entry, exit));
-            to.faces.push(Face { start, len, ..*f });
+            push(cap_edges, &mut n_cap, (entry, exit))?;
+            push(&mut to.faces, &mut nf, Face { start, len, ..*f })?;
             continue;
         }
-        let face = &to.index[start..];
+        let face = &to.index[start..ni];
         let mut on_edges = 0;
         for k in 0..len {
             let (u, w) = (face[k], face[if k + 1 == len { 0 } else { k + 1 }]);
             if on_plane[u as usize] && on_plane[w as usize] {
                 on_edges += 1;
                 if on_edges == 1 {
-                    cap_edges.push((w, u));
+                    push(cap_edges, &mut n_cap, (w, u))?;
                 }
             }
         }
@@ -453,51 +503,59 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
             // plane's body (where a body's face lies on a node layer, the cell beyond it holds
             // the facet, as the tetrahedra do).
             cap.clear();
-            cap.extend(to.index[start..].iter().map(|&v| to.verts[v as usize]));
-            to.verts.clear();
-            to.verts.extend_from_slice(cap);
-            to.index.clear();
-            to.index.extend(0..len as u16);
-            to.faces.clear();
-            to.faces.push(Face { start: 0, len, body: Some(plane.body), normal: plane.n });
+            cap.extend(to.index[start..ni].iter().map(|&v| to.verts[v as usize]));
+            for (k, &x) in cap.iter().enumerate() {
+                to.verts[k] = x;
+                to.index[k] = k as u16;
+            }
+            to.faces[0] = Face { start: 0, len, body: Some(plane.body), normal: plane.n };
+            (to.nv, to.ni, to.nf) = (len, len, 1);
             return Some(true);
         }
         chained &= on_edges <= 1;
-        to.faces.push(Face { start, len, ..*f });
+        push(&mut to.faces, &mut nf, Face { start, len, ..*f })?;
     }
-    if to.faces.is_empty() {
+    if nf == 0 {
+        (to.nv, to.ni, to.nf) = (nv, ni, nf);
         return Some(true);
     }
-    let start = to.index.len();
+    let start = ni;
     // The cap is the chain of the faces' cut edges, or else its points ordered by angle.
-    if !(chained && chain(cap_edges, &mut to.index)) {
-        to.index.truncate(start);
+    if !(chained && chain(&cap_edges[..n_cap], &mut to.index, &mut ni)) {
+        ni = start;
         cap.clear();
-        let on = to.verts.iter().zip(on_plane.iter()).filter(|v| *v.1).map(|v| *v.0);
+        let on = to.verts[..nv].iter().zip(on_plane.iter()).filter(|v| *v.1).map(|v| *v.0);
         cap.extend(on);
         super::polyhedra::cap_polygon(cap, plane.n, tol);
         // Each point is one of the vertices it was taken from.
-        let index = cap.iter().filter_map(|x| to.verts.iter().position(|y| y == x));
-        to.index.extend(index.map(|v| v as u16));
+        for x in cap.iter() {
+            if let Some(v) = to.verts[..nv].iter().position(|y| y == x) {
+                push(&mut to.index, &mut ni, v as u16)?;
+            }
+        }
     }
-    let len = to.index.len() - start;
+    let len = ni - start;
     if len >= 3 {
-        to.faces.push(Face { start, len, body: Some(plane.body), normal: plane.n });
+        push(&mut to.faces, &mut nf, Face { start, len, body: Some(plane.body), normal: plane.n })?;
     } else {
-        to.index.truncate(start);
+        ni = start;
     }
-    (to.index.len() <= MAX_VERTS && to.faces.len() <= MAX_FACES).then_some(true)
+    (to.nv, to.ni, to.nf) = (nv, ni, nf);
+    (ni <= MAX_VERTS && nf <= MAX_FACES).then_some(true)
 }
 
-/// Appends to `out` the cycle the cap's `edges` form, each vertex once; whether they form one
-/// (every edge used once, each vertex left by one edge), else `out` may hold part of it.
-fn chain(edges: &[(u16, u16)], out: &mut Vec<u16>) -> bool {
+/// Appends to `out` (of length `len`) the cycle the cap's `edges` form, each vertex once;
+/// whether they form one (every edge used once, each vertex left by one edge), else `out`
+/// may hold part of it.
+fn chain(edges: &[(u16, u16)], out: &mut [u16; CAP_INDEX], len: &mut usize) -> bool {
     if edges.len() < 3 || edges.len() > 128 {
         return false;
     }
     let mut used = 1u128;
     let (first, mut at) = edges[0];
-    out.push(first);
+    if push(out, len, first).is_none() {
+        return false;
+    }
     while at != first {
         let mut next = None;
         for (k, e) in edges.iter().enumerate() {
@@ -510,7 +568,9 @@ fn chain(edges: &[(u16, u16)], out: &mut Vec<u16>) -> bool {
         }
         let Some(k) = next else { return false };
         used |= 1 << k;
-        out.push(at);
+        if push(out, len, at).is_none() {
+            return false;
+        }
         at = edges[k].1;
     }
     used.count_ones() as usize == edges.len()
