@@ -10,7 +10,9 @@
 //! polyhedra, walls and the plank as exact polyhedra; the rest (cylinders, sphere–box) on the
 //! grid. `--reuse f` sets the geometry reuse (0: every contact evaluated in full on every
 //! sub-step). `--f32` runs the same scene in rapier3d (f32) with the f32 drop-in, and writes
-//! `drop_in_f32.csv`.
+//! `drop_in_f32.csv`. `--length-unit m` sets rapier's `length_unit` in both runs (default 1 m,
+//! as an untuned scene has it; rapier advises the bodies' size, here 0.02 m, which takes its
+//! broad-phase pairs from ~14 000 to ~950).
 
 #[path = "common/mod.rs"]
 mod common;
@@ -36,7 +38,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             eprintln!("--reuse: {e}");
             std::process::exit(2);
         }),
+        length_unit: args.number("--length-unit", 1.0),
     };
+    if !(options.length_unit > 0.0 && options.length_unit.is_finite()) {
+        eprintln!("--length-unit: must be a length > 0 (m), got {}", options.length_unit);
+        std::process::exit(2);
+    }
     println!("rapier build: {}", if f32 { "rapier3d (f32)" } else { "rapier3d-f64" });
     let run = if f32 { drop_in::f32::run } else { drop_in::run };
     let Summary {

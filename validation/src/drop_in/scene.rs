@@ -159,13 +159,14 @@ fn rapier_penetration(world: &PhysicsWorld) -> f64 {
 /// discrete contact added by the few lines marked below — printing a row every
 /// `report_every` s of simulated time.
 pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
-    let Options { bodies: n, seconds, per_contact, n_c, exact, reuse } = *options;
+    let Options { bodies: n, seconds, per_contact, n_c, exact, reuse, length_unit } = *options;
     // 1. The scene with rapier's own contacts.
     let BinScene { mut world, .. } = bin_scene(n);
+    world.integration_parameters.length_unit = length_unit as Real;
     let dt = world.integration_parameters.dt as f64;
     let steps = (seconds / dt).round() as usize;
     let every = (report_every / dt).round() as usize;
-    println!("{n} bodies (radius {BODY_RADIUS} m) and a see-saw on a revolute joint, dt = {dt:.5} s, {seconds} s simulated");
+    println!("{n} bodies (radius {BODY_RADIUS} m) and a see-saw on a revolute joint, dt = {dt:.5} s, {seconds} s simulated, rapier's length unit {length_unit} m");
     println!("\nrapier's own contacts:");
     println!("{:>6} {:>12} {:>14} {:>8}", "t (s)", "KE (J)", "penetration", "wall (s)");
     let start = Instant::now();
@@ -189,6 +190,7 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
     // 2. The same scene with the discrete contact: these lines are the drop-in (rubber
     //    E = 5 MPa, e = 0.5, friction 0.5/0.4).
     let BinScene { mut world, .. } = bin_scene(n);
+    world.integration_parameters.length_unit = length_unit as Real;
     let overlap = OverlapSettings::new(n_c, IntegrationMode::Subcell)?;
     let mut contacts = discrete_contacts_with(
         overlap.with_closed_form_spheres(exact).with_exact_polyhedra(exact),
