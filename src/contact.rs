@@ -7,7 +7,8 @@
 //! A live contact therefore keeps its last full geometry in B's frame ([`Reference`]) and,
 //! while the pair's relative motion since then stays small against the indentation and the
 //! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead: the
-//! indentation by the approach along the normal, the volume along the overlap's own power law
+//! indentation by the approach (how far A's material at the contact point moved along the
+//! normal), the volume along the overlap's own power law
 //! `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the secant of the
 //! last two full evaluations, or at first the shape measure the stiffness uses), the contact
 //! point as between two balls about the bodies' centres and across the contact plane as a
@@ -145,20 +146,20 @@ impl Reference {
         // (not when both turn alike, as in B's frame under a spinning B, nor for a ball
         // spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels across the
         // grid by the shift plus the roll.
-        let (deepening, turned, contact_point, gradients) = self.approach(shapes, relative);
-        let (tilted, weight) = match self.tilted(turned, deepening) {
+        let (approach, turned, contact_point, gradients) = self.approach(shapes, relative);
+        let (tilted, weight) = match self.tilted(turned, approach) {
             Some(t) => (t, TILT_WEIGHT),
             None => (Tilt { volume: 0.0, shift: Vector::ZERO }, FROZEN_TILT),
         };
         let tilt = weight * turned.length() * self.reach;
-        if !(deepening.abs() + tilt <= fraction * self.indentation
+        if !(approach.abs() + tilt <= fraction * self.indentation
             && across + chord * self.lever <= fraction * self.cell)
         {
             return None;
         }
         // The overlap grows as if similar about its deepest point: its depth `D = d / rate`
         // follows the approach one to one, `d` and `V` in proportion to `D` and `D^p`.
-        let ratio = 1.0 + deepening * self.depth_rate / self.indentation;
+        let ratio = 1.0 + approach * self.depth_rate / self.indentation;
         // Parting (possible only with allowances above 1) is left to a full evaluation.
         if !(ratio > 0.0) {
             return None;
@@ -218,9 +219,11 @@ impl Reference {
 
     /// The approach at the contact point since this reference, for A now at `relative` (m),
     /// with how far the summed gradients turned there, the moved contact point (B's frame) and
-    /// the gradients. The ball rule ([`deepening`](Self::deepening)) measures the approach at
-    /// A's centre; between nearly parallel surfaces a tilt `t` (the turn's in-plane part) adds
-    /// `t·(c_A − x_c)` at the contact point, where a face turned about A's centre approaches.
+    /// the gradients. The approach is how far A's material at the contact point moved along
+    /// the normal into B: to first order the change of the local indentation, whatever the
+    /// shapes — a face turned about A's centre approaches by its turn times the lever, a ball
+    /// rolling or spinning on another does not approach it, and a body on a long one (a plank,
+    /// a wall) approaches along the normal where it rests, not along the line of the centres.
     fn approach<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         shapes: (&A, &B),
@@ -230,10 +233,8 @@ impl Reference {
         let contact_point = self.moved_contact_point(&motion);
         let gradients = surface_gradients(shapes, relative, contact_point);
         let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
-        let mut approach = self.deepening(&motion);
-        if self.radii[0].is_finite() && self.parallel() {
-            approach += self.in_plane(turned).dot(self.centre_a(&motion).0 - self.contact_point);
-        }
+        let x = self.contact_point;
+        let approach = -(motion.transform_point(x) - x).dot(self.normal);
         (approach, turned, contact_point, gradients)
     }
 
@@ -275,25 +276,6 @@ impl Reference {
             x + moved_a
         } else {
             x + moved_a * (r_b / (r_a + r_b))
-        }
-    }
-
-    /// How far A's `motion` took it into B (m), as between two balls about the bodies'
-    /// centres (see [`moved_contact_point`](Self::moved_contact_point)): the centres'
-    /// approach, or a centre's approach to the other body's plane. A ball rolling or spinning
-    /// on another does not approach it.
-    fn deepening(&self, motion: &Pose) -> Real {
-        let [r_a, r_b] = self.radii;
-        let (x, n, centre_b) = (self.contact_point, self.normal, self.centres[1]);
-        let (then, moved_a) = self.centre_a(motion);
-        if !r_a.is_finite() {
-            // A's plane, through its material point at the contact point, turned with A.
-            let (moved, turned) = (motion.transform_point(x), motion.rotation * n);
-            (x - centre_b).dot(n) - (moved - centre_b).dot(turned)
-        } else if !r_b.is_finite() {
-            -moved_a.dot(n)
-        } else {
-            (then - centre_b).length() - (then + moved_a - centre_b).length()
         }
     }
 }
@@ -414,7 +396,7 @@ impl ContactModel {
     /// full evaluations a live contact's geometry is updated from the pair's relative motion
     /// (see the module docs) while
     /// - its local indentation changes by at most `fraction × d` — the approach at the
-    ///   contact point plus twice the tilt across the overlap (how far the surfaces' normals
+    ///   contact point (A's material there, along the normal) plus twice the tilt across the overlap (how far the surfaces' normals
     ///   at the contact point turned, times the corrected box's diagonal; eight times where
     ///   the surfaces meet at an angle: an update follows a tilt only between nearly parallel
     ///   surfaces, and only to first order), and

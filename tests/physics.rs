@@ -521,6 +521,62 @@ fn geometry_reuse_moves_the_contact_point_as_a_tilt_does() {
     }
 }
 
+/// Geometry reuse measures the approach where the bodies meet, not along the line of their
+/// centres: a cube resting near the end of a long plank (the line of the centres nearly along
+/// the plank) pressed 3 µm further in is updated as a full evaluation gives it, and slid along
+/// the plank it is updated without a full evaluation and without parting.
+#[test]
+fn geometry_reuse_takes_the_approach_at_the_contact_on_a_long_body() {
+    let mat = Material::new(5e8, 0.35).unwrap();
+    let full = ContactModel::new(
+        PairParameters::new(&mat, &mat, 0.8).unwrap(),
+        settings(6, IntegrationMode::Subcell),
+    );
+    let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
+    let r = 0.005;
+    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
+    let plank = ConvexShape::cuboid(Vector::new(0.1, 0.005, 0.02)).unwrap();
+    let b = BodyState::at_rest(&plank, Pose::IDENTITY);
+    let depth = 2e-5;
+    let at = |x: f64, sink: f64| {
+        let centre = Vector::new(x, 0.005 + r - depth - sink, 0.0);
+        BodyState::at_rest(&cube, Pose::from_parts(centre, Rotation::IDENTITY))
+    };
+    let evaluate =
+        |m: &ContactModel, a: &BodyState<ConvexShape>, state: &mut Option<ContactState>| {
+            m.evaluate(a, &b, state).unwrap().expect("overlap")
+        };
+    let start = evaluate(&full, &at(0.08, 0.0), &mut None).geometry;
+    // Pressed in.
+    let mut state = None;
+    evaluate(&reuse, &at(0.08, 0.0), &mut state);
+    let updated = evaluate(&reuse, &at(0.08, 3e-6), &mut state);
+    let exact = evaluate(&full, &at(0.08, 3e-6), &mut None).geometry;
+    assert!(!updated.full, "3 µm of 20 µm is within the allowance");
+    let (dd, dv) = (exact.indentation - start.indentation, exact.volume - start.volume);
+    let (off_d, off_v) = (
+        (updated.geometry.indentation - exact.indentation).abs(),
+        (updated.geometry.volume - exact.volume).abs(),
+    );
+    println!("pressed: indentation change {dd:.3e} m, update off by {off_d:.3e}; volume change {dv:.3e} m³, off by {off_v:.3e}");
+    assert!(
+        off_d <= 0.05 * dd && off_v <= 0.05 * dv,
+        "pressed: {off_d:.3e} of {dd:.3e} m, {off_v:.3e} of {dv:.3e} m³"
+    );
+    // Slid along the plank, away from its centre.
+    let mut state = None;
+    evaluate(&reuse, &at(0.08, 0.0), &mut state);
+    let slid = evaluate(&reuse, &at(0.0802, 0.0), &mut state);
+    let exact = evaluate(&full, &at(0.0802, 0.0), &mut None).geometry;
+    let off = (slid.geometry.indentation / exact.indentation - 1.0).abs();
+    println!("slid 0.2 mm: full evaluation {}, indentation off by {off:.2e}", slid.full);
+    assert!(
+        !slid.full && off < 0.01,
+        "slid: full evaluation {}, indentation off by {off:.2e}",
+        slid.full
+    );
+}
+
 /// A persistent contact follows its overlap from sub-step to sub-step (sub-cell mode reuses
 /// last sub-step's box instead of searching): along a path that deepens, slides and turns
 /// the oblique cube–cylinder contact, its overlap volume must stay as close to the converged
