@@ -233,9 +233,14 @@ impl Reference {
         let contact_point = self.moved_contact_point(&motion);
         let gradients = surface_gradients(shapes, relative, contact_point);
         let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
+        (self.material_approach(&motion), turned, contact_point, gradients)
+    }
+
+    /// How far A's `motion` took its material at the contact point along the normal into B
+    /// (m): the approach of [`approach`](Self::approach).
+    fn material_approach(&self, motion: &Pose) -> Real {
         let x = self.contact_point;
-        let approach = -(motion.transform_point(x) - x).dot(self.normal);
-        (approach, turned, contact_point, gradients)
+        -(motion.transform_point(x) - x).dot(self.normal)
     }
 
     /// Whether the surfaces at the contact point are nearly parallel (the in-plane part of the
@@ -521,7 +526,7 @@ impl ContactModel {
         let sides = g.corrected_box.maxs - g.corrected_box.mins;
         let reach = sides.length();
         let (exponent, depth_rate) =
-            volume_law(previous, |r| r.approach((a.shape, b.shape), &relative).0, g);
+            volume_law(previous, |r| r.material_approach(&r.motion_since(&relative)), g);
         let contact_point = b.pose.inverse_transform_point(g.contact_point);
         let normal = b.pose.rotation.inverse() * g.normal;
         // Each body's bounding-sphere centre (its own frame), and its distance from the contact
