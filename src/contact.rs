@@ -8,9 +8,9 @@
 //! while the pair's relative motion since then stays small against the indentation and the
 //! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead: the
 //! indentation by the approach (how far A's material at the contact point moved along the
-//! normal), the volume along the overlap's own power law
-//! `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the secant of the
-//! last two full evaluations, or at first the shape measure the stiffness uses), the contact
+//! normal), the volume along the overlap's own power law `V ∝ d^p` (a flat punch's `p = 1`, a
+//! cap's or an edge's 2, a corner's 3: the secant of the last two full evaluations, or at
+//! first the shape measure the stiffness uses), the contact
 //! point as between two balls about the bodies' centres and across the contact plane as a
 //! tilt of the surfaces moves the overlap's centroid (by the overlap's footprint,
 //! [`OverlapGeometry::footprint`]), the normal as the surfaces' own normals at the contact point
@@ -401,10 +401,10 @@ impl ContactModel {
     /// full evaluations a live contact's geometry is updated from the pair's relative motion
     /// (see the module docs) while
     /// - its local indentation changes by at most `fraction × d` — the approach at the
-    ///   contact point (A's material there, along the normal) plus twice the tilt across the overlap (how far the surfaces' normals
-    ///   at the contact point turned, times the corrected box's diagonal; eight times where
-    ///   the surfaces meet at an angle: an update follows a tilt only between nearly parallel
-    ///   surfaces, and only to first order), and
+    ///   contact point (A's material there, along the normal) plus twice the tilt across the
+    ///   overlap (how far the surfaces' normals at the contact point turned, times the
+    ///   corrected box's diagonal; eight times where the surfaces meet at an angle: an update
+    ///   follows a tilt only between nearly parallel surfaces, and only to first order), and
     /// - A's material point at the contact travels across the grid by at most
     ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
     ///   the roll's chord at the nearer body's bounding-sphere centre.
