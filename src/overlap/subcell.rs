@@ -582,9 +582,19 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         lo: inf,
         hi: -inf,
     };
+    // A face with the whole grid inside its half-space, by more than any cell's clip
+    // tolerance, neither cuts nor bounds a cell ([`Cutter::face_planes`]): it is left out.
+    let (grid_lo, grid_hi) = (grid.bounds().mins, grid.bounds().maxs);
+    let inside_tol = crease::tolerance(grid_lo, grid_hi);
     let faces = |body: usize, planes: Option<Vec<(Vector, Real)>>| {
         let spread = |n: Vector| n.abs().dot(h * 0.5);
-        planes.map(|p| p.into_iter().map(|(n, h)| (Plane { n, h, body }, spread(n))).collect())
+        planes.map(|p| {
+            p.into_iter()
+                .map(|(n, h)| Plane { n, h, body })
+                .filter(|p| crease::span(p, grid_lo, grid_hi).1 >= -inside_tol)
+                .map(|p| (p, spread(p.n)))
+                .collect()
+        })
     };
     let mut cutter = Cutter {
         pair,
