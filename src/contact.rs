@@ -139,14 +139,16 @@ impl Reference {
         let q = motion.rotation;
         // A rotation by θ moves a point at distance r by its chord 2 r sin(θ/2) = 2 r |q_xyz|.
         let chord = 2.0 * Vector::new(q.x, q.y, q.z).length();
-        let shift = motion.transform_point(self.contact_point) - self.contact_point;
-        let across = self.in_plane(shift).length();
+        // A's material at the contact point: its move across the contact plane and along the
+        // normal into B (the approach).
+        let shift = self.material_shift(&motion);
+        let (across, approach) = (self.in_plane(shift).length(), -shift.dot(self.normal));
         // The local indentation changes by the approach plus the tilt of the surfaces across
         // the overlap: how far their normals at the contact point turned against each other
         // (not when both turn alike, as in B's frame under a spinning B, nor for a ball
         // spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels across the
         // grid by the shift plus the roll.
-        let (approach, turned, contact_point, gradients) = self.approach(shapes, relative);
+        let (turned, contact_point, gradients) = self.turn(shapes, relative, &motion);
         let (tilted, weight) = match self.tilted(turned, approach) {
             Some(t) => (t, TILT_WEIGHT),
             None => (Tilt { volume: 0.0, shift: Vector::ZERO }, FROZEN_TILT),
@@ -195,7 +197,7 @@ impl Reference {
     /// distance gradients at the contact point turned since this reference, is the change of
     /// the overlap's depth gradient across the contact plane (its in-plane part `t`: the depth
     /// at an in-plane offset `u` from the centroid changes by `−t·u`); `approach` is the
-    /// approach at the contact point ([`approach`](Self::approach)).
+    /// approach at the contact point ([`material_shift`](Self::material_shift)).
     ///
     /// Over the footprint (area `A`, centroid `c`, second moment `J₀`), which stays put for a
     /// face on a face, the centroid moves by `(δa S₁ − J t)/V` and the volume changes by
@@ -203,9 +205,10 @@ impl Reference {
     /// `x_c` and `δa` the approach there. Exact to first order in the tilt for a face on a
     /// face; where faces meet at a small angle the footprint ends where the depth does, so its
     /// change is of second order too; round bodies rolling on each other do not turn their
-    /// gradients (no change). The surfaces count as nearly parallel while the in-plane part of the gradient sum at the
-    /// reference is at most [`PARALLEL`]; between an edge or a corner and a face it is no depth
-    /// gradient (the gradient inside a body near its edge is a face's normal).
+    /// gradients (no change). The surfaces count as nearly parallel while the in-plane part of
+    /// the gradient sum at the reference is at most [`PARALLEL`]; between an edge or a corner
+    /// and a face it is no depth gradient (the gradient inside a body near its edge is a
+    /// face's normal).
     fn tilted(&self, turned: Vector, approach: Real) -> Option<Tilt> {
         if !self.parallel() {
             return None;
@@ -217,30 +220,29 @@ impl Reference {
         Some(Tilt { volume: -t.dot(s1), shift: self.in_plane(s1 * approach - j_t) / self.volume })
     }
 
-    /// The approach at the contact point since this reference, for A now at `relative` (m),
-    /// with how far the summed gradients turned there, the moved contact point (B's frame) and
-    /// the gradients. The approach is how far A's material at the contact point moved along
-    /// the normal into B: to first order the change of the local indentation, whatever the
-    /// shapes — a face turned about A's centre approaches by its turn times the lever, a ball
-    /// rolling or spinning on another does not approach it, and a body on a long one (a plank,
-    /// a wall) approaches along the normal where it rests, not along the line of the centres.
-    fn approach<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    /// How far the bodies' summed distance gradients turned at the contact point under A's
+    /// `motion` since this reference (A now at `relative`), with the moved contact point (B's
+    /// frame) and the gradients there.
+    fn turn<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         shapes: (&A, &B),
         relative: &Pose,
-    ) -> (Real, Vector, Vector, [Vector; 2]) {
-        let motion = self.motion_since(relative);
-        let contact_point = self.moved_contact_point(&motion);
+        motion: &Pose,
+    ) -> (Vector, Vector, [Vector; 2]) {
+        let contact_point = self.moved_contact_point(motion);
         let gradients = surface_gradients(shapes, relative, contact_point);
         let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
-        (self.material_approach(&motion), turned, contact_point, gradients)
+        (turned, contact_point, gradients)
     }
 
-    /// How far A's `motion` took its material at the contact point along the normal into B
-    /// (m): the approach of [`approach`](Self::approach).
-    fn material_approach(&self, motion: &Pose) -> Real {
-        let x = self.contact_point;
-        -(motion.transform_point(x) - x).dot(self.normal)
+    /// How far A's `motion` moved its material at the contact point (B's frame, m). Its part
+    /// along the normal into B, `−shift·n`, is the approach: to first order the change of the
+    /// local indentation, whatever the shapes — a face turned about A's centre approaches by
+    /// its turn times the lever, a ball rolling or spinning on another does not approach it,
+    /// and a body on a long one (a plank, a wall) approaches along the normal where it rests,
+    /// not along the line of the centres.
+    fn material_shift(&self, motion: &Pose) -> Vector {
+        motion.transform_point(self.contact_point) - self.contact_point
     }
 
     /// Whether the surfaces at the contact point are nearly parallel (the in-plane part of the
@@ -316,10 +318,10 @@ const MIN_LOG_INDENTATION_STEP: Real = 0.05;
 
 /// The volume law at the full evaluation `g`: the exponent `p` of `V ∝ d^p`, within [1, 3] (a
 /// punch's 1, a cap's or an edge's 2, a corner's 3), and the indentation's rate against the
-/// approach at the contact point since `previous` (`approach`, see [`Reference::approach`]),
-/// `dd/dδ` within [0.05, 1] (1 where the deepest
-/// point lies under the centroid, as for caps and punches; less for a tilted corner). Both
-/// are secants from the `previous` full evaluation of the same contact where the indentation
+/// approach at the contact point since `previous` (`approach`, see
+/// [`Reference::material_shift`]), `dd/dδ` within [0.05, 1] (1 where the deepest point lies
+/// under the centroid, as for caps and punches; less for a tilted corner). Both are secants
+/// from the `previous` full evaluation of the same contact where the indentation
 /// changed enough between them, else the previous law; at first touch the overlap's shape
 /// measure [`volume_exponent`](crate::force::volume_exponent) and a rate of 1.
 fn volume_law(
@@ -525,8 +527,11 @@ impl ContactModel {
     ) -> Reference {
         let sides = g.corrected_box.maxs - g.corrected_box.mins;
         let reach = sides.length();
-        let (exponent, depth_rate) =
-            volume_law(previous, |r| r.material_approach(&r.motion_since(&relative)), g);
+        let (exponent, depth_rate) = volume_law(
+            previous,
+            |r| -r.material_shift(&r.motion_since(&relative)).dot(r.normal),
+            g,
+        );
         let contact_point = b.pose.inverse_transform_point(g.contact_point);
         let normal = b.pose.rotation.inverse() * g.normal;
         // Each body's bounding-sphere centre (its own frame), and its distance from the contact

@@ -584,7 +584,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     };
     // A face with the whole grid inside its half-space, by more than any cell's clip
     // tolerance, neither cuts nor bounds a cell ([`Cutter::face_planes`]): it is left out.
-    let (grid_lo, grid_hi) = (grid.bounds().mins, grid.bounds().maxs);
+    let Aabb { mins: grid_lo, maxs: grid_hi } = grid.bounds();
     let inside_tol = crease::tolerance(grid_lo, grid_hi);
     let faces = |body: usize, planes: Option<Vec<(Vector, Real)>>| {
         let spread = |n: Vector| n.abs().dot(h * 0.5);

@@ -160,9 +160,13 @@ fn rapier_penetration(world: &PhysicsWorld) -> f64 {
 /// `report_every` s of simulated time.
 pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
     let Options { bodies: n, seconds, per_contact, n_c, exact, reuse, length_unit } = *options;
+    let scene = || {
+        let mut scene = bin_scene(n);
+        scene.world.integration_parameters.length_unit = length_unit as Real;
+        scene
+    };
     // 1. The scene with rapier's own contacts.
-    let BinScene { mut world, .. } = bin_scene(n);
-    world.integration_parameters.length_unit = length_unit as Real;
+    let BinScene { mut world, .. } = scene();
     let dt = world.integration_parameters.dt as f64;
     let steps = (seconds / dt).round() as usize;
     let every = (report_every / dt).round() as usize;
@@ -189,8 +193,7 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
 
     // 2. The same scene with the discrete contact: these lines are the drop-in (rubber
     //    E = 5 MPa, e = 0.5, friction 0.5/0.4).
-    let BinScene { mut world, .. } = bin_scene(n);
-    world.integration_parameters.length_unit = length_unit as Real;
+    let BinScene { mut world, .. } = scene();
     let overlap = OverlapSettings::new(n_c, IntegrationMode::Subcell)?;
     let mut contacts = discrete_contacts_with(
         overlap.with_closed_form_spheres(exact).with_exact_polyhedra(exact),
