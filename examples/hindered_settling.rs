@@ -17,7 +17,8 @@
 //! `--closed-form-spheres` (sphere pairs' overlaps in closed form instead of on the grid),
 //! `--exact-polyhedra` (cube pairs' overlaps as the exact clipped polyhedron); the contact's
 //! settings in every run: `--enlargement 0.2` (Δx, split over the pair), `--smoothing 0.5`
-//! (the `d_B` band's width, Δx), `--restitution 0.926`, `--friction-scale 1` (multiplies
+//! (the `d_B` band's width, Δx), `--virtual-mass 0` (the coefficient `C_V` of the virtual mass
+//! lent to each particle over a fluid step), `--restitution 0.926`, `--friction-scale 1` (multiplies
 //! μ_s = 0.32 and μ_k = 0.16; 0 turns friction off), `--balance lattice|column|fluid` (where
 //! the balance force acts: every node, each particle receiving its nodes' share (default);
 //! each particle receiving exactly `ρ_f V a`, as from a closed column's pressure gradient; the
@@ -336,6 +337,7 @@ fn seed_case(
     c.exact_polyhedra = args.flag("--exact-polyhedra");
     c.enlargement_cells = args.number("--enlargement", c.enlargement_cells);
     c.smoothing_cells = args.number("--smoothing", c.smoothing_cells);
+    c.virtual_mass = args.number("--virtual-mass", c.virtual_mass);
     c.restitution = args.number("--restitution", c.restitution);
     if let Some(name) = args.value("--balance") {
         c.balance = Balance::named(name).ok_or(discrete_contact::Error::InvalidArgument {

@@ -16,19 +16,22 @@
 //! `target/validation/checkpoints/`) and `--resume` (go on from those files after a stop, with
 //! bit-identical results), `--forcing-momentum` (the fluid's force on the sphere as the EDM
 //! forcing's momentum instead of Wen et al.'s link-wise momentum exchange; see
-//! `hlbm::ForceMethod`), `--enlargement 0.143` (contact enlargement, in Δx), `--lubrication`
-//! (the liquid film's force below the gap the lattice resolves, see
-//! `discrete_contact::lubrication`) with `--film-cutoff 1.2` (in Δx) and
-//! `--film-min-gap-um 16` (roughness, µm). `--nodes-per-d 10,16` sets the resolutions as
-//! lattice nodes across the diameter instead of `--dx`.
+//! `hlbm::ForceMethod`), `--enlargement 0.143` (contact enlargement, in Δx: the model of
+//! Marquardt et al., the default), `--lubrication` (the film model instead: the liquid film's
+//! force below the gap the lattice resolves, see `discrete_contact::lubrication`, with a virtual
+//! mass lent to the sphere over each fluid step, see
+//! `discrete_contact::coupling::FluidSettings::with_virtual_mass`, and no enlargement) with
+//! `--film-cutoff 1.2` (in Δx), `--film-min-gap-um 16` (roughness, µm) and `--virtual-mass 0.8`
+//! (its coefficient `C_V`; `--virtual-mass` and `--enlargement` also override either model's).
+//! `--nodes-per-d 10,16` sets the resolutions as lattice nodes across the diameter instead of
+//! `--dx`.
 //!
 //! `--st-sweep` runs e/e_dry against the Stokes number instead: nine experiments from St ≈ 3 to
 //! ≈ 900 in the Li box (the sphere's density, the liquid's viscosity and the release gap
 //! varied; [`SWEEP`]), each at every `--nodes-per-d` resolution (default 10 and 16 nodes
-//! across the diameter) with the contact enlargement Δx/7 and again with the liquid film
-//! instead (enlargement 0, cut-off `--film-cutoff`, minimum gap `--film-min-gap-um`), and
-//! writes `wet_rebound_st.csv` (the summary's columns) and `wet_rebound_st.png` beside Legendre
-//! et al.'s correlation.
+//! across the diameter) with the enlargement model and again with the film model, and writes
+//! `wet_rebound_st.csv` (the summary's columns) and `wet_rebound_st.png` beside Legendre et
+//! al.'s correlation; `--sweep-series film` or `enlargement` runs one of the two series.
 //!
 //! Writes `target/validation/wet_rebound.csv` (`h0_mm,dx_mm,rho_p_kg_m3,mu_pa_s,film,t_s,gap_mm,vz_m_s`,
 //! with contact), `wet_rebound_no_contact.csv` (same columns), `wet_rebound_summary.csv` (one
@@ -116,9 +119,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c.dt = dt.parse::<f64>().expect("--dt-us: a number") * 1e-6;
         }
         c.contact = j.contact;
-        let enlargement =
-            if sweep && j.film { 0.0 } else { args.number("--enlargement", 1.0 / 7.0) };
-        c.enlargement = enlargement * c.dx;
+        // The film model (film, virtual mass, no enlargement) or the enlargement model.
+        let (enlargement, virtual_mass) = if j.film { (0.0, 0.8) } else { (1.0 / 7.0, 0.0) };
+        c.enlargement = args.number("--enlargement", enlargement) * c.dx;
+        c.virtual_mass = args.number("--virtual-mass", virtual_mass);
         if j.film {
             c.film_cutoff = Some(args.number("--film-cutoff", FILM_CUTOFF) * c.dx);
             c.film_min_gap = args.number("--film-min-gap-um", c.film_min_gap * 1e6) * 1e-6;
@@ -133,7 +137,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut jobs: Vec<Job> = Vec::new();
     if sweep {
         for &dx in &dxs {
-            for film in [false, true] {
+            let series: &[bool] = match args.value("--sweep-series") {
+                Some("film") => &[true],
+                Some("enlargement") => &[false],
+                _ => &[false, true],
+            };
+            for &film in series {
                 for &(rho_p, mu, h0) in &SWEEP {
                     jobs.push(Job { h0, dx, rho_p, mu, contact: true, film });
                 }
@@ -171,14 +180,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let Job { h0, dx, rho_p, mu, contact, film } = job;
         let case = case_for(&job);
         let settings = format!(
-            "ρ_p = {rho_p} kg/m³, μ = {mu} Pa s, h0 = {h0} mm, Δx = {dx:.4} mm ({:.1} nodes across), Δt = {:.2} µs, {}",
+            "ρ_p = {rho_p} kg/m³, μ = {mu} Pa s, h0 = {h0} mm, Δx = {dx:.4} mm ({:.1} nodes across), Δt = {:.2} µs, {}, enlargement {:.3} Δx, C_V = {}",
             2.0 * case.radius / case.dx,
             case.dt * 1e6,
             match (contact, film) {
                 (false, _) => "no contact",
                 (true, false) => "with contact",
                 (true, true) => "with contact and film",
-            }
+            },
+            case.enlargement / case.dx,
+            case.virtual_mass
         );
         println!("\n{settings}");
         let start = Instant::now();
@@ -467,7 +478,7 @@ fn plot_st(path: &std::path::Path, runs: &[Run]) -> Result<(), Box<dyn std::erro
                 let style = if filled { colour.filled() } else { colour.stroke_width(2) };
                 let label = format!(
                     "D = {nodes:.0} Δx, {}",
-                    if film { "liquid film, no enlargement" } else { "enlargement Δx/7" }
+                    if film { "liquid film and virtual mass" } else { "enlargement Δx/7" }
                 );
                 ch.draw_series(pts.into_iter().map(move |p| Circle::new(p, 5, style)))?
                     .label(label)

@@ -65,12 +65,15 @@ use crate::periodic::PeriodicBox;
 use crate::rapier::{DiscreteContacts, StepStats};
 use crate::shape::{ConvexShape, Sdf};
 
+mod virtual_mass;
+
 /// The fluid's physical parameters and resolution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FluidSettings {
     units: UnitConverter,
     smoothing: Real,
     force: ForceMethod,
+    virtual_mass: Real,
 }
 
 impl FluidSettings {
@@ -82,6 +85,7 @@ impl FluidSettings {
             units: UnitConverter::new(dx, dt, nu, rho)?,
             smoothing: dx,
             force: ForceMethod::default(),
+            virtual_mass: 0.0,
         })
     }
 
@@ -100,6 +104,24 @@ impl FluidSettings {
             eps,
             (Excluded(0.0), Included(4.0 * self.units.dx())),
             "0 < eps <= 4 dx",
+        )?;
+        Ok(self)
+    }
+
+    /// With a virtual mass `C_V ρ_f V` lent to every coupled body over each fluid step,
+    /// `0 <= c <= 4`; 0 (none) by default. A contact that turns a body round within a few fluid
+    /// steps then turns the liquid's added mass with it, as in a liquid, instead of leaving the
+    /// lattice — whose pressure travels at its sound speed — to take that momentum from the
+    /// rebound over the steps after it; the momentum lent comes back over the time the
+    /// lattice's own reaction takes, so where the motion is smooth on that time the two cancel.
+    /// A point mass at the centre of mass: no rotational added mass. See
+    /// [`lent_momentum`](Fluid::lent_momentum).
+    pub fn with_virtual_mass(mut self, c: Real) -> Result<Self> {
+        self.virtual_mass = crate::error::check_range(
+            "virtual mass coefficient",
+            c,
+            (Included(0.0), Included(4.0)),
+            "0 <= c <= 4",
         )?;
         Ok(self)
     }
@@ -144,6 +166,9 @@ struct Coupled {
     /// Hydrodynamic force and torque (about the centre of mass) of the last step (N, N m).
     force: Vector,
     torque: Vector,
+    /// The momentum the virtual mass took from the body and has not yet returned (kg m/s).
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    lent_momentum: Vector,
 }
 
 /// A body as one mapping sees it.
@@ -198,6 +223,9 @@ pub struct Fluid {
     lattice: Lattice,
     units: UnitConverter,
     smoothing: Real,
+    /// The virtual mass coefficient `C_V` ([`FluidSettings::with_virtual_mass`]).
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    virtual_mass: Real,
     /// Physical position of node (0, 0, 0).
     origin: Vector,
     /// The fluid's box, rounded to whole cells, with its periodic axes.
@@ -248,6 +276,7 @@ impl Fluid {
             lattice,
             units: settings.units,
             smoothing: settings.smoothing,
+            virtual_mass: settings.virtual_mass,
             origin,
             domain,
             bodies: Vec::new(),
@@ -275,6 +304,7 @@ impl Fluid {
             previous: (z, z, z),
             force: z,
             torque: z,
+            lent_momentum: z,
         });
         Ok(())
     }
@@ -284,8 +314,13 @@ impl Fluid {
     /// sub-steps) when given, else `world.step()`. Sets `world.integration_parameters.dt` to
     /// the fluid's `Δt`.
     ///
+    /// With a virtual mass ([`FluidSettings::with_virtual_mass`]) each body carries it over the
+    /// step (rapier's mass properties and gravity scale are given back after it).
+    ///
     /// Fails with the lattice's [`hlbm::Error::Unstable`] (step and node) when the fluid blows
-    /// up, and with the contacts' errors.
+    /// up, with the contacts' errors, and before anything moves with
+    /// [`Error::InvalidArgument`] for a body with a virtual mass whose additional mass was set
+    /// as a bare mass (`set_additional_mass`) rather than as mass properties.
     pub fn step(
         &mut self,
         world: &mut PhysicsWorld,
@@ -299,6 +334,11 @@ impl Fluid {
                 });
             }
         }
+        if self.virtual_mass > 0.0 {
+            for b in &self.bodies {
+                virtual_mass::check(world, b.body)?;
+            }
+        }
         let mut report = FluidStepReport::default();
         let clock = std::time::Instant::now();
         let corrections = self.map_bodies(world, &mut report)?;
@@ -309,20 +349,31 @@ impl Fluid {
         // Hydrodynamic force plus buoyancy −ρ_f V g, held on each body over the step.
         let buoyancy = -self.units.density() * world.gravity;
         let mut applied = Vec::with_capacity(self.bodies.len());
+        let mut lent = Vec::new();
+        let dt = self.units.dt();
         for (id, (b, (cf, cm))) in self.bodies.iter_mut().zip(corrections).enumerate() {
             let pf = lattice.particle_forces.get(&(id as u32)).copied().unwrap_or_default();
             let f = Vector::from(pf.force) + cf;
             let m = Vector::from(pf.moment) + cm;
             b.force = f * self.units.force_to_physical(1.0);
             b.torque = m * self.units.torque_to_physical(1.0);
-            if let Some(rb) = world.bodies.get_mut(b.body) {
-                let total = b.force + b.volume * buoyancy;
-                applied.push((b.body, rb.user_force(), rb.user_torque()));
-                rb.add_force(total, true);
-                rb.add_torque(b.torque, true);
+            if world.bodies.get(b.body).is_none() {
+                continue;
             }
+            let m_v = self.virtual_mass * self.units.density() * b.volume;
+            let mut total = b.force + b.volume * buoyancy;
+            if m_v > 0.0 {
+                let returned =
+                    b.lent_momentum * virtual_mass::returned_share(b.volume, self.units.dx(), dt);
+                lent.push((id, m_v, returned, virtual_mass::lend(world, b.body, m_v)));
+                total += returned / dt;
+            }
+            let rb = &mut world.bodies[b.body];
+            applied.push((b.body, rb.user_force(), rb.user_torque()));
+            rb.add_force(total, true);
+            rb.add_torque(b.torque, true);
         }
-        world.integration_parameters.dt = self.units.dt();
+        world.integration_parameters.dt = dt;
         let result = match contacts {
             Some(c) => c.step(world).map(Some),
             None => {
@@ -331,6 +382,10 @@ impl Fluid {
             }
         };
         crate::rapier::take_back(world, &applied);
+        for (id, m_v, returned, l) in lent {
+            let dv = virtual_mass::give_back(world, l);
+            self.bodies[id].lent_momentum += m_v * dv - returned;
+        }
         report.seconds.bodies =
             clock.elapsed().as_secs_f64() - report.seconds.mapping - report.seconds.lattice;
         report.contacts = result?;
@@ -542,6 +597,13 @@ impl Fluid {
     /// the last step, without buoyancy (N, N m).
     pub fn hydrodynamic_force(&self, collider: ColliderHandle) -> Option<(Vector, Vector)> {
         self.bodies.iter().find(|b| b.collider == collider).map(|b| (b.force, b.torque))
+    }
+
+    /// The momentum the virtual mass ([`FluidSettings::with_virtual_mass`]) has taken from the
+    /// body of `collider` and not yet returned (kg m/s): its momentum `m v` is the impulse of
+    /// every force on it since it was coupled, less this.
+    pub fn lent_momentum(&self, collider: ColliderHandle) -> Option<Vector> {
+        self.bodies.iter().find(|b| b.collider == collider).map(|b| b.lent_momentum)
     }
 
     /// The lattice (read access: fields, populations, dimensions).

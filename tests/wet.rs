@@ -1,6 +1,7 @@
 //! Four-way coupled runs at coarse, fast resolutions: a settling sphere reaches the drag law's
 //! terminal velocity, a sphere falling onto the floor rebounds with the contact and does not
-//! without it, no energy is created, and a sphere turned round in still liquid receives the
+//! without it, no energy is created (with the enlargement and with the film model), the
+//! virtual mass keeps the momentum, and a sphere turned round in still liquid receives the
 //! added-mass impulse.
 
 use std::sync::OnceLock;
@@ -115,6 +116,25 @@ fn sphere_rebounds_with_the_contact_and_not_without() {
 #[test]
 fn wet_rebound_creates_no_energy() {
     let (case, t) = with_contact();
+    creates_no_energy(case, t);
+}
+
+/// The film model (the liquid film below 1.2 Δx, a virtual mass 0.8 ρ_f V, no enlargement):
+/// the momentum lent to the virtual mass and given back after the contact must not lift the
+/// sphere higher than it fell.
+#[test]
+fn wet_rebound_with_the_film_model_creates_no_energy() {
+    let mut case = coarse(true);
+    case.film_cutoff = Some(1.2 * case.dx);
+    case.enlargement = 0.0;
+    case.virtual_mass = 0.8;
+    let t = run(&case, |_, _| {}).unwrap();
+    creates_no_energy(&case, &t);
+}
+
+/// The sphere's kinetic and buoyant potential energy never exceed the release's, and it
+/// rebounds.
+fn creates_no_energy(case: &WetRebound, t: &Trajectory) {
     let volume = 4.0 / 3.0 * std::f64::consts::PI * case.radius.powi(3);
     let mass = case.particle_density * volume;
     let buoyant_weight = (case.particle_density - case.fluid_density) * volume * 9.81;
@@ -143,6 +163,7 @@ fn fluid_refuses_bad_input_by_name() {
     assert_eq!(name(FluidSettings::new(1e-3, 1e-4, Real::NAN, 1000.0).unwrap_err()), "nu");
     let settings = FluidSettings::new(1e-3, 1e-4, 1e-6, 1000.0).unwrap();
     assert_eq!(name(settings.with_smoothing(1.0).unwrap_err()), "smoothing");
+    assert_eq!(name(settings.with_virtual_mass(-0.5).unwrap_err()), "virtual mass coefficient");
     assert_eq!(
         name(
             Fluid::closed_box(Vector::ZERO, Vector::new(1e-2, 0.0, 1e-2), settings).err().unwrap()
@@ -155,6 +176,60 @@ fn fluid_refuses_bad_input_by_name() {
     let wall = world.insert_collider(ColliderBuilder::ball(1e-3), Some(fixed));
     let mut fluid = Fluid::closed_box(Vector::ZERO, Vector::splat(1e-2), settings).unwrap();
     assert_eq!(name(fluid.couple(&world, wall).unwrap_err()), "collider");
+    // A virtual mass joins a body's own additional mass only as mass properties: a bare
+    // additional mass scales the inertia with it.
+    let heavier = world.insert_body(RigidBodyBuilder::dynamic().additional_mass(1e-3));
+    let ball = world.insert_collider(ColliderBuilder::ball(1e-3).density(2000.0), Some(heavier));
+    let settings = settings.with_virtual_mass(0.5).unwrap();
+    let mut fluid = Fluid::closed_box(Vector::ZERO, Vector::splat(1e-2), settings).unwrap();
+    fluid.couple(&world, ball).unwrap();
+    assert_eq!(
+        name(fluid.step(&mut world, None).unwrap_err()),
+        "additional mass of a body with a virtual mass"
+    );
+}
+
+/// A light sphere (ρ_p = 1.5 ρ_f) falling from rest in a closed box at D = 6 nodes; with the
+/// virtual mass `C_V ρ_f V`, per fluid step, its velocity and the forces applied to it
+/// (hydrodynamic, buoyancy, weight): over `steps` steps, the momentum `m (v_N − v_0)` and the
+/// impulse `Σ F Δt`, the momentum still lent, and the final velocity.
+fn fall_with_virtual_mass(c: Real, steps: usize) -> (Real, Real, Real, Real) {
+    let (r, rho_f, nu, dx) = (4.75e-3, 1230.0, 4.08e-5, 1.6e-3);
+    let dt = 0.1 * dx * dx / (3.0 * nu);
+    let mut world = PhysicsWorld::new();
+    world.gravity = Vector::new(0.0, 0.0, -9.81);
+    let body =
+        world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.03, 0.03, 0.1)));
+    let ball = world.insert_collider(ColliderBuilder::ball(r).density(1.5 * rho_f), Some(body));
+    let settings = FluidSettings::new(dx, dt, nu, rho_f).unwrap().with_virtual_mass(c).unwrap();
+    let mut fluid =
+        Fluid::closed_box(Vector::ZERO, Vector::new(0.06, 0.06, 0.12), settings).unwrap();
+    fluid.couple(&world, ball).unwrap();
+    let volume = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    let mass = world.bodies[body].mass();
+    let mut impulse = 0.0;
+    for _ in 0..steps {
+        fluid.step(&mut world, None).unwrap();
+        let hydrodynamic = fluid.hydrodynamic_force(ball).unwrap().0.z;
+        impulse += (hydrodynamic + (rho_f * volume - mass) * 9.81) * dt;
+    }
+    let v = world.bodies[body].linvel().z;
+    assert_eq!(world.bodies[body].mass(), mass, "the virtual mass was not given back");
+    (mass * v, impulse, fluid.lent_momentum(ball).unwrap().z, v)
+}
+
+/// The virtual mass creates and loses no momentum: the body's momentum is the impulse of the
+/// forces on it less what is still lent, its weight stays `m g` while it carries `m_v`, and
+/// where the motion is smooth it barely changes it.
+#[test]
+fn the_virtual_mass_keeps_the_momentum_and_leaves_a_smooth_motion_alone() {
+    let (p0, j0, lent0, v0) = fall_with_virtual_mass(0.0, 100);
+    let (p1, j1, lent1, v1) = fall_with_virtual_mass(1.0, 100);
+    println!("C_V = 0: m Δv {p0:.6e}, impulse {j0:.6e}; C_V = 1: m Δv {p1:.6e} + lent {lent1:.6e}, impulse {j1:.6e}; speeds {v0:.5} / {v1:.5} m/s");
+    assert_eq!(lent0, 0.0);
+    assert!((p0 - j0).abs() <= 1e-9 * j0.abs(), "{p0} against {j0}");
+    assert!((p1 + lent1 - j1).abs() <= 1e-9 * j1.abs(), "{p1} + {lent1} against {j1}");
+    assert!(v0 < -0.01 && (v1 / v0 - 1.0).abs() < 0.02, "{v0} against {v1}");
 }
 
 /// The field the mapping writes (each body over its own index box, wrapped across periodic

@@ -142,6 +142,9 @@ pub struct HinderedSettling {
     pub enlargement_cells: Real,
     /// Smoothing width of `d_B` in lattice spacings.
     pub smoothing_cells: Real,
+    /// Virtual mass coefficient `C_V` (see `FluidSettings::with_virtual_mass`; 0: none).
+    #[serde(default)]
+    pub virtual_mass: Real,
     /// With the discrete contact (without it particles pass through each other).
     pub contacts: bool,
     /// How the lattice measures the fluid's force on the particles.
@@ -188,6 +191,7 @@ impl HinderedSettling {
             substeps_per_contact: 15.0,
             enlargement_cells: 0.2,
             smoothing_cells: 0.5,
+            virtual_mass: 0.0,
             contacts: true,
             force_method: ForceMethod::default(),
             closed_form_spheres: false,
@@ -519,7 +523,8 @@ impl SettlingRun {
         let dx = case.dx();
         let settings = FluidSettings::new(dx, case.dt(), case.viscosity(), case.fluid_density)?
             .with_smoothing(case.smoothing_cells * dx)?
-            .with_force_method(case.force_method);
+            .with_force_method(case.force_method)
+            .with_virtual_mass(case.virtual_mass)?;
         let mut fluid = Fluid::new(Vector::ZERO, Vector::splat(l), [true; 3], settings)?;
         for &(_, c) in &particles {
             fluid.couple(&world, c)?;

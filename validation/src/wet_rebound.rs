@@ -58,6 +58,9 @@ pub struct WetRebound {
     pub film_min_gap: Real,
     /// Smoothing width of the solid fraction `d_B` (m).
     pub smoothing: Real,
+    /// Virtual mass coefficient `C_V` (see `FluidSettings::with_virtual_mass`; 0: none).
+    #[serde(default)]
+    pub virtual_mass: Real,
     /// With the discrete contact (otherwise nothing but the fluid stops the sphere).
     pub contact: bool,
     /// How the lattice measures the fluid's force on the sphere.
@@ -92,6 +95,7 @@ impl WetRebound {
             film_cutoff: None,
             film_min_gap: default_film_min_gap(),
             smoothing: 0.5 * dx,
+            virtual_mass: 0.0,
             contact: true,
             force_method: ForceMethod::default(),
             end_time: 0.25,
@@ -216,7 +220,8 @@ impl ReboundRun {
             case.fluid_density,
         )?
         .with_smoothing(case.smoothing)?
-        .with_force_method(case.force_method);
+        .with_force_method(case.force_method)
+        .with_virtual_mass(case.virtual_mass)?;
         let mut fluid = Fluid::closed_box(Vector::ZERO, case.box_size, settings)?;
         fluid.couple(&world, sphere)?;
 
