@@ -17,8 +17,9 @@
 //! `--closed-form-spheres` (sphere pairs' overlaps in closed form instead of on the grid),
 //! `--exact-polyhedra` (cube pairs' overlaps as the exact clipped polyhedron); the contact's
 //! settings in every run: `--enlargement 0.2` (Δx, split over the pair), `--smoothing 0.5`
-//! (the `d_B` band's width, Δx), `--virtual-mass 0` (the coefficient `C_V` of the virtual mass
-//! lent to each particle over a fluid step), `--restitution 0.926`, `--friction-scale 1` (multiplies
+//! (the `d_B` band's width, Δx), `--lubrication` (the film model of `wet_rebound`: the liquid
+//! film below 1.2 Δx with `--film-min-gap-um 16`, a virtual mass `--virtual-mass 0.8` lent to
+//! each particle over a fluid step, and no enlargement), `--restitution 0.926`, `--friction-scale 1` (multiplies
 //! μ_s = 0.32 and μ_k = 0.16; 0 turns friction off), `--balance lattice|column|fluid` (where
 //! the balance force acts: every node, each particle receiving its nodes' share (default);
 //! each particle receiving exactly `ρ_f V a`, as from a closed column's pressure gradient; the
@@ -110,7 +111,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let c0 = case_for(ParticleShape::Sphere, phis[0], ars[0], true)?;
     println!(
-        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, enlargement {} Δx, smoothing {} Δx, run {} D/U, balance {}",
+        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, enlargement {} Δx, smoothing {} Δx, C_V = {}, film minimum gap {:?} m, run {} D/U, balance {}",
         c0.diameter * 1e3,
         c0.nodes_per_diameter,
         c0.box_nodes,
@@ -124,6 +125,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c0.n_c,
         c0.enlargement_cells,
         c0.smoothing_cells,
+        c0.virtual_mass,
+        c0.film_min_gap,
         c0.duration,
         c0.balance.name()
     );
@@ -335,9 +338,15 @@ fn seed_case(
     }
     c.closed_form_spheres = args.flag("--closed-form-spheres");
     c.exact_polyhedra = args.flag("--exact-polyhedra");
-    c.enlargement_cells = args.number("--enlargement", c.enlargement_cells);
     c.smoothing_cells = args.number("--smoothing", c.smoothing_cells);
-    c.virtual_mass = args.number("--virtual-mass", c.virtual_mass);
+    // The film model (film, virtual mass, no enlargement) or the enlargement model.
+    let film = args.flag("--lubrication");
+    let (enlargement, virtual_mass) = if film { (0.0, 0.8) } else { (c.enlargement_cells, 0.0) };
+    c.enlargement_cells = args.number("--enlargement", enlargement);
+    c.virtual_mass = args.number("--virtual-mass", virtual_mass);
+    if film {
+        c.film_min_gap = Some(args.number("--film-min-gap-um", 16.0) * 1e-6);
+    }
     c.restitution = args.number("--restitution", c.restitution);
     if let Some(name) = args.value("--balance") {
         c.balance = Balance::named(name).ok_or(discrete_contact::Error::InvalidArgument {

@@ -145,6 +145,10 @@ pub struct HinderedSettling {
     /// Virtual mass coefficient `C_V` (see `FluidSettings::with_virtual_mass`; 0: none).
     #[serde(default)]
     pub virtual_mass: Real,
+    /// The liquid film's force between particles closer than `FILM_CUTOFF` Δx, with this
+    /// minimum gap (m; see `FluidSettings::lubrication`); `None`: no film.
+    #[serde(default)]
+    pub film_min_gap: Option<Real>,
     /// With the discrete contact (without it particles pass through each other).
     pub contacts: bool,
     /// How the lattice measures the fluid's force on the particles.
@@ -192,6 +196,7 @@ impl HinderedSettling {
             enlargement_cells: 0.2,
             smoothing_cells: 0.5,
             virtual_mass: 0.0,
+            film_min_gap: None,
             contacts: true,
             force_method: ForceMethod::default(),
             closed_form_spheres: false,
@@ -567,6 +572,9 @@ impl SettlingRun {
                 // E = 5 kPa: a head-on collision at the settling speed indents ~30 % of D (Hertz).
                 .with_indentation_limit(1.0)?
                 .with_periodic(fluid.periodic_box().expect("a triply periodic fluid"));
+            if let Some(h_min) = case.film_min_gap {
+                c = c.with_lubrication(settings.lubrication(h_min)?);
+            }
             for &(_, h) in &particles {
                 c.handle(&mut world, h, case.material)?;
             }
