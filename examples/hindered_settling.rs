@@ -51,6 +51,7 @@ use discrete_contact::coupling::ForceMethod;
 use discrete_contact_validation::hindered_settling::{
     Balance, HinderedSettling, ParticleShape, SettlingResult, SettlingRun,
 };
+use discrete_contact_validation::wet_rebound::{FILM_MIN_GAP, FILM_MODEL_VIRTUAL_MASS};
 use plotters::prelude::*;
 
 /// One finished run.
@@ -341,11 +342,12 @@ fn seed_case(
     c.smoothing_cells = args.number("--smoothing", c.smoothing_cells);
     // The film model (film, virtual mass, no enlargement) or the enlargement model.
     let film = args.flag("--lubrication");
-    let (enlargement, virtual_mass) = if film { (0.0, 0.8) } else { (c.enlargement_cells, 0.0) };
+    let (enlargement, virtual_mass) =
+        if film { (0.0, FILM_MODEL_VIRTUAL_MASS) } else { (c.enlargement_cells, 0.0) };
     c.enlargement_cells = args.number("--enlargement", enlargement);
     c.virtual_mass = args.number("--virtual-mass", virtual_mass);
     if film {
-        c.film_min_gap = Some(args.number("--film-min-gap-um", 16.0) * 1e-6);
+        c.film_min_gap = Some(args.number("--film-min-gap-um", FILM_MIN_GAP * 1e6) * 1e-6);
     }
     c.restitution = args.number("--restitution", c.restitution);
     if let Some(name) = args.value("--balance") {

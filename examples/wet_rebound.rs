@@ -46,7 +46,9 @@ use std::time::Instant;
 use discrete_contact::coupling::{ForceMethod, FILM_CUTOFF};
 use discrete_contact::material::Material;
 use discrete_contact::math::Vector;
-use discrete_contact_validation::wet_rebound::{ReboundRun, Trajectory, WetRebound};
+use discrete_contact_validation::wet_rebound::{
+    ReboundRun, Trajectory, WetRebound, FILM_MODEL_VIRTUAL_MASS,
+};
 use plotters::prelude::*;
 
 /// One run's settings (lengths in mm) beyond the Li (2010) case.
@@ -120,7 +122,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         c.contact = j.contact;
         // The film model (film, virtual mass, no enlargement) or the enlargement model.
-        let (enlargement, virtual_mass) = if j.film { (0.0, 0.8) } else { (1.0 / 7.0, 0.0) };
+        let (enlargement, virtual_mass) =
+            if j.film { (0.0, FILM_MODEL_VIRTUAL_MASS) } else { (1.0 / 7.0, 0.0) };
         c.enlargement = args.number("--enlargement", enlargement) * c.dx;
         c.virtual_mass = args.number("--virtual-mass", virtual_mass);
         if j.film {

@@ -6,13 +6,15 @@
 
 use std::sync::OnceLock;
 
-use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod};
+use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod, FILM_CUTOFF};
 use discrete_contact::hlbm::correlations::{
     di_felice_wall_factor, schiller_naumann_terminal_velocity,
 };
 use discrete_contact::math::{Real, Rotation, Vector};
 use discrete_contact::rapier3d_f64::prelude::*;
-use discrete_contact_validation::wet_rebound::{run, Trajectory, WetRebound};
+use discrete_contact_validation::wet_rebound::{
+    run, Trajectory, WetRebound, FILM_MODEL_VIRTUAL_MASS,
+};
 
 #[test]
 fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {
@@ -125,9 +127,9 @@ fn wet_rebound_creates_no_energy() {
 #[test]
 fn wet_rebound_with_the_film_model_creates_no_energy() {
     let mut case = coarse(true);
-    case.film_cutoff = Some(1.2 * case.dx);
+    case.film_cutoff = Some(FILM_CUTOFF * case.dx);
     case.enlargement = 0.0;
-    case.virtual_mass = 0.8;
+    case.virtual_mass = FILM_MODEL_VIRTUAL_MASS;
     let t = run(&case, |_, _| {}).unwrap();
     creates_no_energy(&case, &t);
 }

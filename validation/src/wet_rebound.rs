@@ -120,11 +120,18 @@ impl WetRebound {
     }
 }
 
-/// The film's minimum gap unless set: 16 µm, fitted to a 6 mm steel sphere in silicone oil at
-/// St = 19 and Δx = 0.6 mm (`docs/wet.md`) — more than a polished sphere's roughness, as the
-/// film also stands for what the contact model leaves out there.
+/// The film's minimum gap unless set (m): 16 µm, fitted to a 6 mm steel sphere in silicone
+/// oil at St = 19 and Δx = 0.6 mm (`docs/wet.md`) — more than a polished sphere's roughness, as
+/// the film also stands for what the contact model leaves out there.
+pub const FILM_MIN_GAP: Real = 16e-6;
+
+/// The film model's virtual mass coefficient `C_V` (with the film and no enlargement): 0.8,
+/// potential flow's added mass of a sphere touching a plane; chosen by the e/e_dry sweep over
+/// the Stokes number at 10 and 16 nodes per diameter (`docs/wet.md`).
+pub const FILM_MODEL_VIRTUAL_MASS: Real = 0.8;
+
 fn default_film_min_gap() -> Real {
-    16e-6
+    FILM_MIN_GAP
 }
 
 /// What a run recorded.
