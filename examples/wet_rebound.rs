@@ -139,12 +139,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let finest = dxs.iter().cloned().fold(f64::INFINITY, f64::min);
     let mut jobs: Vec<Job> = Vec::new();
     if sweep {
+        let series: &[bool] = match args.value("--sweep-series") {
+            None => &[false, true],
+            Some("film") => &[true],
+            Some("enlargement") => &[false],
+            Some(_) => {
+                return Err(discrete_contact::Error::InvalidArgument {
+                    name: "--sweep-series",
+                    allowed: "film or enlargement",
+                }
+                .into())
+            }
+        };
         for &dx in &dxs {
-            let series: &[bool] = match args.value("--sweep-series") {
-                Some("film") => &[true],
-                Some("enlargement") => &[false],
-                _ => &[false, true],
-            };
             for &film in series {
                 for &(rho_p, mu, h0) in &SWEEP {
                     jobs.push(Job { h0, dx, rho_p, mu, contact: true, film });
