@@ -19,7 +19,8 @@
 //! settings in every run: `--enlargement 0.2` (Δx, split over the pair), `--smoothing 0.5`
 //! (the `d_B` band's width, Δx), `--lubrication` (the film model of `wet_rebound`: the liquid
 //! film below 1.2 Δx with `--film-min-gap-um 16`, a virtual mass `--virtual-mass 0.8` lent to
-//! each particle over a fluid step, and no enlargement), `--restitution 0.926`, `--friction-scale 1` (multiplies
+//! each particle over a fluid step, and no enlargement; `--film-shear` adds the film's sliding
+//! and rolling terms), `--restitution 0.926`, `--friction-scale 1` (multiplies
 //! μ_s = 0.32 and μ_k = 0.16; 0 turns friction off), `--balance lattice|column|fluid` (where
 //! the balance force acts: every node, each particle receiving its nodes' share (default);
 //! each particle receiving exactly `ρ_f V a`, as from a closed column's pressure gradient; the
@@ -112,7 +113,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let c0 = case_for(ParticleShape::Sphere, phis[0], ars[0], true)?;
     println!(
-        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, enlargement {} Δx, smoothing {} Δx, C_V = {}, film minimum gap {:?} m, run {} D/U, balance {}",
+        "D = {} mm = {} Δx, box {} Δx ({:.1} D), ρ_p/ρ_f = {}, τ = {}, e = {}, μ_s/μ_k = {}/{}, E = {} Pa, N_c = {}, enlargement {} Δx, smoothing {} Δx, C_V = {}, film minimum gap {:?} m, film shear {}, run {} D/U, balance {}",
         c0.diameter * 1e3,
         c0.nodes_per_diameter,
         c0.box_nodes,
@@ -128,6 +129,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c0.smoothing_cells,
         c0.virtual_mass,
         c0.film_min_gap,
+        c0.film_shear,
         c0.duration,
         c0.balance.name()
     );
@@ -348,6 +350,12 @@ fn seed_case(
     c.virtual_mass = args.number("--virtual-mass", virtual_mass);
     if film {
         c.film_min_gap = Some(args.number("--film-min-gap-um", FILM_MIN_GAP * 1e6) * 1e-6);
+        c.film_shear = args.flag("--film-shear");
+    } else if args.flag("--film-shear") {
+        return Err(discrete_contact::Error::InvalidArgument {
+            name: "--film-shear",
+            allowed: "only with --lubrication (the film it adds to)",
+        });
     }
     c.restitution = args.number("--restitution", c.restitution);
     if let Some(name) = args.value("--balance") {

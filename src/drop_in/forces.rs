@@ -2,6 +2,7 @@
 //! torques summed in the candidates' order and put on the bodies; periodic wrapping.
 
 use super::*;
+use crate::lubrication::{film_radius_at, reduced_radius};
 
 impl DiscreteContacts {
     /// Moves every dynamic body of a handled bounded collider whose centre of mass left the
@@ -114,17 +115,23 @@ impl DiscreteContacts {
         let velocity = |k: &BodyKinematics| k.linvel + k.angvel.cross(x - k.center_of_mass);
         // `normal1` points out of A, towards B: closing when A moves along it faster than B.
         let closing = (velocity(a.2) - velocity(b.2)).dot(c.normal1);
-        let r_star = ha.film_radius_with(hb);
-        let f = lub.normal_force(c.dist, closing, r_star);
-        if f == 0.0 || !f.is_finite() {
+        let radii = (
+            film_radius_at(&ha.shape, a.0.inverse_transform_point(c.point1)),
+            film_radius_at(&hb.shape, b.0.inverse_transform_point(c.point2)),
+        );
+        let f = lub.normal_force(c.dist, closing, reduced_radius(radii.0, radii.1));
+        let normal_on_a = -f * c.normal1;
+        let (shear_on_a, shear_torque_a, shear_torque_b) =
+            lub.shear_force(c.dist, x, c.normal1, radii, (a.2, b.2));
+        let force_on_a = normal_on_a + shear_on_a;
+        if force_on_a == Vector::ZERO && shear_torque_a == Vector::ZERO || !force_on_a.is_finite() {
             return None;
         }
-        let force_on_a = -f * c.normal1;
         Some(Film {
             bodies: (a.3, b.3),
             force_on_a,
-            torque_on_a: (x - a.2.center_of_mass).cross(force_on_a),
-            torque_on_b: (x - b.2.center_of_mass).cross(-force_on_a),
+            torque_on_a: (x - a.2.center_of_mass).cross(normal_on_a) + shear_torque_a,
+            torque_on_b: (x - b.2.center_of_mass).cross(-normal_on_a) + shear_torque_b,
         })
     }
 

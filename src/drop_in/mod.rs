@@ -62,8 +62,9 @@ struct Handled {
 }
 
 impl Handled {
-    /// The reduced radius of curvature `R*` (m) the liquid film between this collider and
-    /// `other` acts with ([`film_radius`](crate::lubrication::film_radius) of each).
+    /// The largest reduced radius of curvature `R*` (m) the liquid film between this collider
+    /// and `other` can act with ([`film_radius`](crate::lubrication::film_radius) of each, the
+    /// bound of the radius at the gap): for the sub-step advice.
     fn film_radius_with(&self, other: &Handled) -> Real {
         use crate::lubrication::{film_radius, reduced_radius};
         reduced_radius(film_radius(&self.shape), film_radius(&other.shape))
@@ -256,8 +257,8 @@ impl DiscreteContacts {
         self.periodic.as_ref()
     }
 
-    /// With the liquid film's normal force ([`Lubrication`]) between every handled pair
-    /// closer than its cut-off, beside the contact force (and through the contact, the gap
+    /// With the liquid film's normal force ([`Lubrication`], and its sliding terms when
+    /// [`Lubrication::with_shear`]) between every handled pair closer than its cut-off, beside the contact force (and through the contact, the gap
     /// held at the film's minimum). The sub-step advice resolves the film's damping at its
     /// minimum gap. For bodies immersed in a liquid whose solver does not resolve gaps below
     /// the cut-off (see `coupling`).

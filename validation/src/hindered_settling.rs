@@ -149,6 +149,9 @@ pub struct HinderedSettling {
     /// minimum gap (m; see `FluidSettings::lubrication`); `None`: no film.
     #[serde(default)]
     pub film_min_gap: Option<Real>,
+    /// The film's sliding and rolling terms too (see `Lubrication::with_shear`).
+    #[serde(default)]
+    pub film_shear: bool,
     /// With the discrete contact (without it particles pass through each other).
     pub contacts: bool,
     /// How the lattice measures the fluid's force on the particles.
@@ -197,6 +200,7 @@ impl HinderedSettling {
             smoothing_cells: 0.5,
             virtual_mass: 0.0,
             film_min_gap: None,
+            film_shear: false,
             contacts: true,
             force_method: ForceMethod::default(),
             closed_form_spheres: false,
@@ -573,7 +577,7 @@ impl SettlingRun {
                 .with_indentation_limit(1.0)?
                 .with_periodic(fluid.periodic_box().expect("a triply periodic fluid"));
             if let Some(h_min) = case.film_min_gap {
-                c = c.with_lubrication(settings.lubrication(h_min)?);
+                c = c.with_lubrication(settings.lubrication(h_min)?.with_shear(case.film_shear));
             }
             for &(_, h) in &particles {
                 c.handle(&mut world, h, case.material)?;
