@@ -3,7 +3,7 @@
 //! persistent contact (seeded with its last box) or as a first touch.
 //!
 //! `cargo run --release --example contact_profile -- --pair sphere_sphere --n-c 4 --iterations 2000`
-//! (`--pair sphere_sphere|cylinder_plane|cube_cube|hull_hull|capsule_cylinder`, `--first` for first touches). Prints the mean time per
+//! (`--pair sphere_sphere|cylinder_plane|cube_cube|hull_hull|capsule_cylinder`, `--first` for first touches, `--exact-polyhedra` for the exact form of polyhedral pairs). Prints the mean time per
 //! evaluation and the result, so two builds can be compared on the same output.
 
 mod common;
@@ -25,10 +25,12 @@ fn main() {
         eprintln!("unknown --pair {pair}: one of {names}");
         std::process::exit(2);
     };
-    let settings = OverlapSettings::new(n_c, IntegrationMode::Subcell).unwrap_or_else(|e| {
-        eprintln!("--n-c: {e}");
-        std::process::exit(2);
-    });
+    let settings = OverlapSettings::new(n_c, IntegrationMode::Subcell)
+        .unwrap_or_else(|e| {
+            eprintln!("--n-c: {e}");
+            std::process::exit(2);
+        })
+        .with_exact_polyhedra(args.flag("--exact-polyhedra"));
     let m = Material::new(5e8, 0.35).unwrap();
     let params = PairParameters::new(&m, &m, 0.85).unwrap();
     let model = ContactModel::new(params, settings);

@@ -97,12 +97,12 @@
 /// Deserializes a parameter type from its fields through its constructor (feature
 /// `checkpoint`), so values read from a file pass the same checks as values given in code.
 macro_rules! deserialize_checked {
-    ($ty:ident via $shadow:ident { $($field:ident: $fty:ty),* $(,)? } => |$f:ident| $check:expr) => {
+    ($ty:ident via $shadow:ident { $($(#[$m:meta])* $field:ident: $fty:ty),* $(,)? } => |$f:ident| $check:expr) => {
         #[doc = concat!("A [`", stringify!($ty), "`] as read from a file, checked before use.")]
         #[cfg(feature = "checkpoint")]
         #[derive(serde::Deserialize)]
         struct $shadow {
-            $($field: $fty),*
+            $($(#[$m])* $field: $fty),*
         }
 
         #[cfg(feature = "checkpoint")]

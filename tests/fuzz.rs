@@ -100,7 +100,8 @@ struct PairCase {
     velocities: ((Vector, Vector), (Vector, Vector)),
     /// log10 E, ν, e.
     material: (Real, Real, Real),
-    /// N_c, sub-cell, friction, exact forms (closed-form spheres and exact polyhedra).
+    /// N_c, sub-cell, friction, exact forms (closed-form spheres and exact polyhedra; without
+    /// them polyhedral pairs on the grid).
     grid: (usize, bool, bool, bool),
     closeness: Real,
 }
@@ -141,7 +142,8 @@ fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
         OverlapSettings::new(n_c, mode)
             .unwrap()
             .with_closed_form_spheres(exact)
-            .with_exact_polyhedra(exact),
+            .with_exact_polyhedra(exact)
+            .with_polyhedra_on_grid(!exact),
     );
     let ba = BodyState::at_rest(&a, pa).moving(va.0, va.1);
     let bb = BodyState::at_rest(&b, pb).moving(vb.0, vb.1);

@@ -60,7 +60,7 @@ pub(super) fn overlap_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             if g == Vector::ZERO || !g.is_finite() {
                 continue;
             }
-            clip(faces, g, g.dot(x) - d + margin, s, tol);
+            clip(faces, g, g.dot(x) - d + margin, tol);
             any = true;
             if faces.is_empty() {
                 break;

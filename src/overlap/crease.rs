@@ -146,8 +146,23 @@ pub(super) struct Scratch {
     pub(super) planes: Vec<Plane>,
 }
 
+thread_local! {
+    /// Each thread's clip buffers, kept between evaluations.
+    static SPARE: std::cell::RefCell<Option<Scratch>> = const { std::cell::RefCell::new(None) };
+}
+
 impl Scratch {
-    pub(super) fn new() -> Self {
+    /// This thread's buffers (new ones the first time); [`give_back`](Self::give_back) after use.
+    pub(super) fn take() -> Self {
+        SPARE.with(|s| s.borrow_mut().take()).unwrap_or_else(Self::new)
+    }
+
+    /// Keeps the buffers for this thread's next [`take`](Self::take).
+    pub(super) fn give_back(self) {
+        SPARE.with(|s| *s.borrow_mut() = Some(self));
+    }
+
+    fn new() -> Self {
         Self {
             polys: Box::new([Poly::EMPTY, Poly::EMPTY]),
             links: Box::new(Links {
@@ -227,10 +242,7 @@ pub(super) fn clip_cell(
     }
     cell_faces(lo, hi, poly);
     if deepest_first {
-        let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
-        let depth = |p: &Plane| (p.n.dot(mid) - p.h) / p.n.abs().dot(half);
-        scratch.planes.sort_unstable_by(|p, q| depth(q).total_cmp(&depth(p)).then(order(p, q)));
-        return clip_planes(0, scratch);
+        return clip_deepest_first(lo, hi, scratch);
     }
     let tol = scratch.tol;
     let flat = scratch.planes.iter().enumerate().filter(|(_, p)| span(p, lo, hi).0 >= -tol);
@@ -242,6 +254,15 @@ pub(super) fn clip_cell(
         return clip_more(1, scratch);
     }
     clip_more(0, scratch)
+}
+
+/// Clips the box `lo`–`hi`, already in the current polyhedron, by `scratch.planes`, those
+/// that cut deepest first (see [`clip_cell`]).
+fn clip_deepest_first(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option<Clipped> {
+    let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+    let depth = |p: &Plane| (p.n.dot(mid) - p.h) / p.n.abs().dot(half);
+    scratch.planes.sort_unstable_by(|p, q| depth(q).total_cmp(&depth(p)).then(order(p, q)));
+    clip_planes(0, scratch)
 }
 
 /// The order the planes are clipped in: by their coefficients, so the same for either
@@ -301,6 +322,33 @@ fn clip_planes(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
         }
     }
     Some(integrals(&scratch.polys[scratch.current]))
+}
+
+/// The box `lo`–`hi` clipped by `scratch.planes` (a whole overlap of two polyhedra bounded by
+/// their faces, deepest first): its integrals and the footprint of the bodies' faces (half of
+/// each, see [`footprint`](super::footprint)); `None` when a face of the box is left (the box
+/// did not hold the overlap) or the polyhedron would outgrow the buffers.
+pub(super) fn clip_box(
+    lo: Vector,
+    hi: Vector,
+    scratch: &mut Scratch,
+) -> Option<(Clipped, super::footprint::Sums)> {
+    // No two-plane exclusion test first (as for a cell): it costs a pass over all pairs of
+    // the bodies' faces, and the box holds the whole overlap, so it rarely excludes.
+    scratch.tol = tolerance(lo, hi);
+    scratch.current = 0;
+    cell_faces(lo, hi, &mut scratch.polys[0]);
+    let clipped = clip_deepest_first(lo, hi, scratch)?;
+    let poly = &scratch.polys[scratch.current];
+    let mut footprint = super::footprint::Sums::default();
+    for f in poly.faces() {
+        f.body?;
+        let p = |i: usize| poly.verts[poly.index[f.start + i] as usize];
+        for i in 2..f.len {
+            footprint.add_triangle([p(0), p(i - 1), p(i)], 0.5);
+        }
+    }
+    Some((clipped, footprint))
 }
 
 /// Volume, first moment, per-body facet area vectors and areas, and the box of `poly`.

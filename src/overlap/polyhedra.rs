@@ -1,13 +1,21 @@
 //! Exact overlap of two bodies bounded by planes — cuboids, convex polyhedra, a half-space.
-//! Opt-in through [`OverlapSettings::with_exact_polyhedra`](super::OverlapSettings::with_exact_polyhedra).
+//! Taken in sub-cell mode for every pair without enlargement (see below), and for enlarged
+//! pairs and in counting mode through
+//! [`OverlapSettings::with_exact_polyhedra`](super::OverlapSettings::with_exact_polyhedra).
 //!
 //! The overlap of two such bodies is itself a convex polyhedron: the intersection of both
 //! bodies' face half-spaces. It is built by clipping a box around the pair by every face plane
-//! in turn (Sutherland–Hodgman on each face polygon, the cut closed by a cap polygon on the
-//! plane), and then everything the grid integration approximates is exact: the volume and
+//! in turn (with [`crease`](super::crease)'s clip, which keeps each vertex once), and then
+//! everything the grid integration approximates is exact: the volume and
 //! centroid by the divergence theorem (tetrahedra from an inner point to the faces' fans), the
 //! normal from the faces' area vectors — blended as [`subcell`](super::subcell) does, B's
-//! faces against A's — and the indentation as the chord through the centroid along the normal.
+//! faces against A's — the indentation as the chord through the centroid along the normal, and
+//! the footprint from the faces.
+//!
+//! In sub-cell mode a pair of polyhedra without enlargement always takes this form: the grid
+//! would clip its cells by the same faces and sum to the same polyhedron
+//! ([`OverlapSettings::with_polyhedra_on_grid`](super::OverlapSettings::with_polyhedra_on_grid)
+//! checks one against the other).
 //!
 //! An enlargement `ε` moves every face plane out by `ε`: a sharp-edged enlargement, where the
 //! grid's `d <= ε` rounds the edges and corners. The two differ only where the overlap reaches
@@ -20,16 +28,15 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
+use super::crease::{self, Plane};
 use super::{blended_normal, Exact, OverlapGeometry, Pair};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
 
-/// A face of the clipped polyhedron: its vertices (ordered around its plane's normal), its
-/// plane `n·x <= h` and the body it lies on (`None`: the starting box).
+/// A face of a polytope clipped face by face (the cutting-plane box, [`bound`](super::bound)):
+/// its vertices, ordered around its outward normal.
 pub(super) struct Face {
     pub(super) verts: Vec<Vector>,
-    normal: Vector,
-    body: Option<usize>,
 }
 
 /// The overlap of the pair when both bodies are bounded by planes: [`Exact::Overlap`] when they
@@ -43,80 +50,46 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let (Some(planes_a), Some(planes_b)) = (pair.a.planes(), pair.b.planes()) else {
         return Exact::Uncovered;
     };
-    let mut planes: Vec<(Vector, Real, usize)> = [planes_a, planes_b]
+    let planes: Vec<(Vector, Real, usize)> = [planes_a, planes_b]
         .into_iter()
         .enumerate()
         .flat_map(|(body, planes)| planes.into_iter().map(move |(n, h)| (n, h, body)))
         .collect();
-    // Clipped in an order by the planes' coefficients, not by body: swapping the bodies then
-    // builds the same polyhedron to the last bit, so the forces are exactly opposite also where
-    // the overlap's net area vector is a small difference of large facets (a body nearly
-    // engulfed).
-    planes.sort_by(|p, q| {
-        let key = |(n, h, _): &(Vector, Real, usize)| [n.x, n.y, n.z, *h];
-        key(p)
-            .iter()
-            .zip(key(q).iter())
-            .map(|(x, y)| x.total_cmp(y))
-            .find(|o| o.is_ne())
-            .unwrap_or(core::cmp::Ordering::Equal)
-    });
     let size = (rough.maxs - rough.mins).length();
     if !(size.is_finite() && size > 0.0) {
         return Exact::Uncovered;
     }
-    let tol = 1e-12 * size;
     // Clip a box a little larger than the rough box. The rough box bounds the bodies dilated
     // by `ε` (rounded), but a face moved out by `ε` reaches further at a sharp vertex (√3 ε at
     // a cube's corner, more at a sharper one): when a face of the start box survives the
-    // clipping, the start was too small, and a larger one is tried.
+    // clipping, the start was too small, and a larger one is tried. The planes are clipped in
+    // an order given by their coefficients, not by body (see `crease`): swapping the bodies
+    // builds the same polyhedron to the last bit, so the forces are exactly opposite also where
+    // the overlap's net area vector is a small difference of large facets (a body nearly
+    // engulfed).
     let mut pad = 0.01 * size + 2.0 * (pair.a.eps + pair.b.eps);
-    let faces = 'grow: {
-        for _ in 0..4 {
-            let mut faces =
-                start_box(rough.mins - Vector::splat(pad), rough.maxs + Vector::splat(pad));
-            for &(n, h, body) in &planes {
-                clip(&mut faces, n, h, body, tol);
-                if faces.is_empty() {
-                    return Exact::Apart;
-                }
-            }
-            if faces.iter().all(|f| f.body.is_some()) {
-                break 'grow faces;
-            }
-            pad = 4.0 * pad + size;
+    let mut scratch = crease::Scratch::take();
+    let mut clipped = None;
+    for _ in 0..4 {
+        scratch.planes.clear();
+        scratch.planes.extend(planes.iter().map(|&(n, h, body)| Plane { n, h, body }));
+        let pad_v = Vector::splat(pad);
+        clipped = crease::clip_box(rough.mins - pad_v, rough.maxs + pad_v, &mut scratch);
+        if clipped.is_some() {
+            break;
         }
-        return Exact::Uncovered;
-    };
-    let count: usize = faces.iter().map(|f| f.verts.len()).sum();
-    let inner = faces.iter().flat_map(|f| f.verts.iter().copied()).sum::<Vector>() / count as Real;
-    let (mut volume, mut moment) = (0.0, Vector::ZERO);
-    let (mut area_vec, mut area) = ([Vector::ZERO; 2], [0.0; 2]);
-    let (mut lo, mut hi) = (Vector::splat(Real::INFINITY), Vector::splat(Real::NEG_INFINITY));
-    for f in &faces {
-        let p = &f.verts;
-        let mut a = 0.0;
-        for i in 1..p.len() - 1 {
-            let v = (p[0] - inner).dot((p[i] - inner).cross(p[i + 1] - inner)).abs() / 6.0;
-            volume += v;
-            moment += (inner + p[0] + p[i] + p[i + 1]) * (0.25 * v);
-            a += 0.5 * (p[i] - p[0]).cross(p[i + 1] - p[0]).length();
-        }
-        let Some(body) = f.body else { return Exact::Uncovered };
-        area_vec[body] += f.normal * a;
-        area[body] += a;
-        for v in p {
-            lo = lo.min(*v);
-            hi = hi.max(*v);
-        }
+        pad = 4.0 * pad + size;
     }
-    if volume.is_nan() {
+    scratch.give_back();
+    let Some((c, footprint)) = clipped else { return Exact::Uncovered };
+    if c.volume.is_nan() {
         return Exact::Uncovered;
     }
-    if volume <= 0.0 {
+    if c.volume <= 0.0 {
         return Exact::Apart;
     }
-    let centroid = moment / volume;
+    let (volume, centroid) = (c.volume, c.moment / c.volume);
+    let (area_vec, area, lo, hi) = (c.normal, c.area, c.lo, c.hi);
     // Blended as the sub-cell integration blends its facets.
     let normal = blended_normal(area_vec, area).normalize_or_zero();
     if normal == Vector::ZERO || !normal.is_finite() {
@@ -141,7 +114,7 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         indentation,
         surface_area: area[0] + area[1],
         corrected_box: Aabb::new(lo, hi),
-        footprint: None,
+        footprint: footprint.finish(),
     })
 }
 
@@ -162,16 +135,16 @@ pub(super) fn start_box(lo: Vector, hi: Vector) -> Vec<Face> {
                 (0..8).filter(|c| (c & bit != 0) == (side == 1)).map(corner).collect();
             let normal = Vector::AXES[axis] * if side == 1 { 1.0 } else { -1.0 };
             order_around(&mut verts, normal);
-            faces.push(Face { verts, normal, body: None });
+            faces.push(Face { verts });
         }
     }
     faces
 }
 
-/// Keeps the part of the polyhedron with `n·x <= h` and closes it with a face of `body` on the
+/// Keeps the part of the polyhedron with `n·x <= h` and closes it with a face on the
 /// plane, in place (the faces' vertex buffers are reused). Points within `tol` of the plane
 /// count as on it.
-pub(super) fn clip(faces: &mut Vec<Face>, n: Vector, h: Real, body: usize, tol: Real) {
+pub(super) fn clip(faces: &mut Vec<Face>, n: Vector, h: Real, tol: Real) {
     let side = |x: Vector| {
         let s = n.dot(x) - h;
         if s.abs() <= tol {
@@ -213,7 +186,7 @@ pub(super) fn clip(faces: &mut Vec<Face>, n: Vector, h: Real, body: usize, tol: 
     cap_polygon(&mut cap, n, tol);
     let distinct = cap.len();
     if distinct >= 3 && !faces.is_empty() {
-        faces.push(Face { verts: cap, normal: n, body: Some(body) });
+        faces.push(Face { verts: cap });
     }
 }
 

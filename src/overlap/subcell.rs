@@ -151,12 +151,6 @@ thread_local! {
     };
 }
 
-thread_local! {
-    /// Each thread's tangent-plane clip buffers, kept between evaluations.
-    static SCRATCH: std::cell::RefCell<Option<crease::Scratch>> =
-        const { std::cell::RefCell::new(None) };
-}
-
 impl EdgeCache {
     fn new(nodes: usize, m: usize) -> Self {
         let (mut t, mut gradients, reach, mut stamp) =
@@ -604,7 +598,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         memo_len: 0,
         sums,
         edges: [pair.a.has_edges(), pair.b.has_edges()],
-        scratch: SCRATCH.with(|s| s.borrow_mut().take()).unwrap_or_else(crease::Scratch::new),
+        scratch: crease::Scratch::take(),
         faces: [faces(0, pair.a.exact_planes()), faces(1, pair.b.exact_planes())],
     };
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
@@ -689,7 +683,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     }
     cutter.cache.reach = reach;
     let Cutter { sums: it, scratch, .. } = cutter;
-    SCRATCH.with(|s| *s.borrow_mut() = Some(scratch));
+    scratch.give_back();
     let centroid = if it.volume > 0.0 { it.moment / it.volume } else { Vector::ZERO };
     Integral {
         volume: it.volume,
