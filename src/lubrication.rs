@@ -109,10 +109,7 @@ impl Lubrication {
     /// `reduced_radius` (m, see [`reduced_radius`]): positive pushes them apart, negative
     /// pulls them together. Zero for `gap >= cutoff`.
     pub fn normal_force(&self, gap: Real, closing_speed: Real, reduced_radius: Real) -> Real {
-        if !(gap < self.cutoff) {
-            return 0.0;
-        }
-        let h = gap.max(self.min_gap);
+        let Some(h) = self.acting_gap(gap) else { return 0.0 };
         6.0 * PI
             * self.viscosity
             * reduced_radius
@@ -142,11 +139,13 @@ impl Lubrication {
 
     /// `ln(h_c/h)` with the gap held at `min_gap`; zero at and beyond the cut-off.
     fn log_factor(&self, gap: Real) -> Real {
-        if gap < self.cutoff {
-            (self.cutoff / gap.max(self.min_gap)).ln()
-        } else {
-            0.0
-        }
+        self.acting_gap(gap).map_or(0.0, |h| (self.cutoff / h).ln())
+    }
+
+    /// The gap the film acts across: `gap` held at `min_gap` below it; `None` at and beyond
+    /// the cut-off (and for a gap that is not a number).
+    fn acting_gap(&self, gap: Real) -> Option<Real> {
+        (gap < self.cutoff).then(|| gap.max(self.min_gap))
     }
 
     /// The film's sliding and rolling terms on a pair a gap `gap` (m) apart at the point `x`,

@@ -50,37 +50,41 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let (Some(planes_a), Some(planes_b)) = (pair.a.planes(), pair.b.planes()) else {
         return Exact::Uncovered;
     };
-    let planes: Vec<(Vector, Real, usize)> = [planes_a, planes_b]
-        .into_iter()
-        .enumerate()
-        .flat_map(|(body, planes)| planes.into_iter().map(move |(n, h)| (n, h, body)))
-        .collect();
     let size = (rough.maxs - rough.mins).length();
     if !(size.is_finite() && size > 0.0) {
         return Exact::Uncovered;
     }
-    // Clip a box a little larger than the rough box. The rough box bounds the bodies dilated
-    // by `ε` (rounded), but a face moved out by `ε` reaches further at a sharp vertex (√3 ε at
-    // a cube's corner, more at a sharper one): when a face of the start box survives the
-    // clipping, the start was too small, and a larger one is tried. The planes are clipped in
-    // an order given by their coefficients, not by body (see `crease`): swapping the bodies
-    // builds the same polyhedron to the last bit, so the forces are exactly opposite also where
-    // the overlap's net area vector is a small difference of large facets (a body nearly
-    // engulfed).
-    let mut pad = 0.01 * size + 2.0 * (pair.a.eps + pair.b.eps);
     let mut scratch = crease::Scratch::take();
+    scratch.planes.clear();
+    for (body, planes) in [planes_a, planes_b].into_iter().enumerate() {
+        scratch.planes.extend(planes.into_iter().map(|(n, h)| Plane { n, h, body }));
+    }
+    let pad = 0.01 * size + 2.0 * (pair.a.eps + pair.b.eps);
+    let exact = clip_and_measure(&mut scratch, rough, size, pad);
+    scratch.give_back();
+    exact
+}
+
+/// The overlap polyhedron of the face planes in `scratch.planes`, clipped from a box `pad`
+/// larger than `rough` (of diagonal `size`), and what it measures.
+fn clip_and_measure(scratch: &mut crease::Scratch, rough: &Aabb, size: Real, pad: Real) -> Exact {
+    // The rough box bounds the bodies dilated by `ε` (rounded), but a face moved out by `ε`
+    // reaches further at a sharp vertex (√3 ε at a cube's corner, more at a sharper one): when
+    // a face of the start box survives the clipping, the start was too small, and a larger one
+    // is tried (the clip only reorders the planes). The planes are clipped in an order given by
+    // their geometry, not by body (see `crease`): swapping the bodies builds the same
+    // polyhedron to the last bit, so the forces are exactly opposite also where the overlap's
+    // net area vector is a small difference of large facets (a body nearly engulfed).
+    let mut pad = pad;
     let mut clipped = None;
     for _ in 0..4 {
-        scratch.planes.clear();
-        scratch.planes.extend(planes.iter().map(|&(n, h, body)| Plane { n, h, body }));
         let pad_v = Vector::splat(pad);
-        clipped = crease::clip_box(rough.mins - pad_v, rough.maxs + pad_v, &mut scratch);
+        clipped = crease::clip_box(rough.mins - pad_v, rough.maxs + pad_v, scratch);
         if clipped.is_some() {
             break;
         }
         pad = 4.0 * pad + size;
     }
-    scratch.give_back();
     let Some((c, footprint)) = clipped else { return Exact::Uncovered };
     if c.volume.is_nan() {
         return Exact::Uncovered;
@@ -88,18 +92,18 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     if c.volume <= 0.0 {
         return Exact::Apart;
     }
-    let (volume, centroid) = (c.volume, c.moment / c.volume);
-    let (area_vec, area, lo, hi) = (c.normal, c.area, c.lo, c.hi);
+    let centroid = c.moment / c.volume;
     // Blended as the sub-cell integration blends its facets.
-    let normal = blended_normal(area_vec, area).normalize_or_zero();
+    let normal = blended_normal(c.normal, c.area).normalize_or_zero();
     if normal == Vector::ZERO || !normal.is_finite() {
         return Exact::Uncovered;
     }
     let exit = |d: Vector| {
-        planes
+        scratch
+            .planes
             .iter()
-            .filter(|(n, _, _)| n.dot(d) > 0.0)
-            .map(|(n, h, _)| (h - n.dot(centroid)) / n.dot(d))
+            .filter(|p| p.n.dot(d) > 0.0)
+            .map(|p| (p.h - p.n.dot(centroid)) / p.n.dot(d))
             .fold(Real::INFINITY, Real::min)
             .max(0.0)
     };
@@ -108,12 +112,12 @@ pub(super) fn overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         return Exact::Uncovered;
     }
     Exact::Overlap(OverlapGeometry {
-        volume,
+        volume: c.volume,
         contact_point: centroid,
         normal,
         indentation,
-        surface_area: area[0] + area[1],
-        corrected_box: Aabb::new(lo, hi),
+        surface_area: c.area[0] + c.area[1],
+        corrected_box: Aabb::new(c.lo, c.hi),
         footprint: footprint.finish(),
     })
 }
