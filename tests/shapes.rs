@@ -336,3 +336,25 @@ fn bounding_spheres_enclose_the_body_and_touch_it() {
         );
     }
 }
+
+/// A cylinder's flat faces and its smooth part bound exactly the body its distance describes:
+/// a point is inside the cylinder when it is inside the infinite round cylinder and below
+/// both caps, and the smooth part's distance is the distance to that round side.
+#[test]
+fn a_cylinder_is_its_round_side_cut_by_its_caps() {
+    let (half_height, radius) = (0.3, 0.2);
+    let cylinder = ConvexShape::cylinder(half_height, radius).unwrap();
+    let caps = cylinder.flat_faces().expect("a cylinder has flat faces");
+    assert_eq!(caps.len(), 2);
+    let mut rng = Lcg(7);
+    for _ in 0..4000 {
+        let p = rng.point(0.5);
+        let (d, g) = cylinder.smooth_part(p);
+        let radial = (p.x * p.x + p.z * p.z).sqrt();
+        assert!((d - (radial - radius)).abs() < 1e-15);
+        assert!((g - Vector::new(p.x, 0.0, p.z) / radial).length() < 1e-12);
+        let inside = d <= 0.0 && caps.iter().all(|&(n, h)| n.dot(p) <= h);
+        assert_eq!(inside, cylinder.distance(p) <= 0.0, "at {p:?}");
+    }
+    assert!(ConvexShape::ball(1.0).unwrap().flat_faces().is_none());
+}

@@ -464,6 +464,9 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
             GONE
         };
     }
+    // Whether part of the polyhedron lies strictly inside the plane: then a face left wholly
+    // on the plane is a sliver of a face nearly on it, not all that is left.
+    let inside_part = sides[..from.verts().len()].iter().any(|&s| s < 0.0);
     let (mut n_cut, mut n_cap) = (0, 0);
     // A face whose cut leaves other than one edge on the plane (a degenerate cut, within
     // `tol`): the cap is then ordered by angle.
@@ -544,6 +547,13 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
                     push(cap_edges, &mut n_cap, (w, u))?;
                 }
             }
+        }
+        if on_edges == len && inside_part {
+            // A face nearly on the plane (another body's plane within round-off of it), cut
+            // to the plane: the cap, ordered by angle, takes its place.
+            ni = start;
+            chained = false;
+            continue;
         }
         if on_edges == len {
             // A face on the plane with a vertex beyond it: the polyhedron lies beyond the
@@ -658,5 +668,22 @@ mod tests {
         scratch.planes.clear();
         scratch.planes.push(Plane { n: -Vector::Z, h: -1.5, body: 1 });
         assert_eq!(clip_cell(Vector::ZERO, Vector::ONE, &mut scratch, false).unwrap().volume, 0.0);
+    }
+
+    /// A second plane within round-off of the first (two nearby tangent planes of a curved
+    /// side) leaves three corners of the first one's face on it and the fourth beyond it by
+    /// just over the tolerance: the cell keeps its half, it does not collapse to that face.
+    #[test]
+    fn a_plane_within_round_off_of_a_face_keeps_the_volume() {
+        let tilt = 1.5e-12;
+        let n = Vector::new(1.0, tilt, tilt);
+        let mut scratch = Scratch::new();
+        scratch.planes.extend([
+            Plane { n: Vector::X, h: 0.5, body: 1 },
+            Plane { n: n / n.length(), h: 0.5 / n.length(), body: 1 },
+        ]);
+        let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch, false).unwrap();
+        assert!((c.volume - 0.5).abs() < 1e-11, "volume {}", c.volume);
+        assert!((c.normal[1] - Vector::X).length() < 1e-11, "facet {:?}", c.normal[1]);
     }
 }

@@ -241,7 +241,12 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
     /// enlargement and the chord need the unit form); a zero or non-finite one gives `None`,
     /// and the pair goes to the grid.
     fn planes(&self) -> Option<Vec<(Vector, Real)>> {
-        let planes = self.shape.face_planes()?;
+        self.placed(self.shape.face_planes()?)
+    }
+
+    /// `planes` given in the body's frame, in the pair's frame as [`planes`](Self::planes) puts
+    /// them.
+    fn placed(&self, planes: Vec<(Vector, Real)>) -> Option<Vec<(Vector, Real)>> {
         planes
             .into_iter()
             .map(|(n, h)| {
@@ -262,6 +267,23 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         } else {
             None
         }
+    }
+
+    /// The body's flat faces ([`Sdf::flat_faces`]) in the pair's frame when they and its smooth
+    /// part bound exactly the body its SDF describes: without enlargement (an enlarged
+    /// cylinder's rims are round).
+    fn exact_flat_faces(&self) -> Option<Vec<(Vector, Real)>> {
+        if self.eps == 0.0 {
+            self.placed(self.shape.flat_faces()?)
+        } else {
+            None
+        }
+    }
+
+    /// Distance and gradient of the body's smooth part at `x` ([`Sdf::smooth_part`]).
+    fn smooth_part(&self, x: Vector) -> (Real, Vector) {
+        let (d, g) = self.shape.smooth_part(self.rot_t * (x - self.origin));
+        (d - self.eps, self.rot * g)
     }
 
     /// The shape's bounds in the pair's frame, enlarged by `ε`; infinite components stay infinite.

@@ -18,7 +18,9 @@
 //! outside a body but within a cell's diagonal of it are tested too — a corner may reach in
 //! between the nodes. A polyhedron ([`Sdf::face_planes`], not enlarged) clips by its own faces
 //! there, and a cell that only polyhedral surfaces pass through is clipped by their faces
-//! without the test: a pair of polyhedra is integrated exactly.
+//! without the test: a pair of polyhedra is integrated exactly. A smooth body cut by flat faces
+//! ([`Sdf::flat_faces`], a cylinder, not enlarged) clips by those faces and its smooth part's
+//! tangent plane, so its edges stay sharp.
 //!
 //! Root finding instead of interpolating SDF values matters: inside a cylinder or a box the
 //! SDF has kinks (the nearest face changes), where interpolated values would misplace the
@@ -71,6 +73,13 @@ const SAMPLES: usize = 15;
 
 /// Rounds of [`Cutter::refine`] at most per bent cell.
 const REFINE_ROUNDS: usize = 16;
+
+/// Rounds of [`Cutter::follow_smooth_parts`] at most per bent cell. Each takes the planes to
+/// the vertices that still poke out of a curved side; two bring the side's outer error to the
+/// order of the interpolated cells' inner one (both second order in the cell's size), and more
+/// would make the rim's cells exact at several times their cost while the rest of the overlap
+/// keeps its error.
+const FOLLOW_ROUNDS: usize = 2;
 
 /// A vertex of a bent cell's polyhedron farther than this fraction of the cell's diagonal
 /// outside a body is cut off by the body's tangent plane there.
@@ -242,6 +251,10 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     /// them (the body within the cell exactly) instead of by tangent planes at samples.
     /// Each face comes with its spread over a cell, `|n|·h/2`: the cells all have the same size.
     faces: [Option<Vec<(Plane, Real)>>; 2],
+    /// Each body's flat faces when it is a smooth body cut by planes ([`Sdf::flat_faces`]),
+    /// with their spreads as for `faces`: its bent cells are clipped by those that cut them and
+    /// by its smooth part's tangent planes.
+    flats: [Option<Vec<(Plane, Real)>>; 2],
 }
 
 /// Volume, moment, normal and bounds summed over the clipped pieces.
@@ -600,6 +613,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         edges: [pair.a.has_edges(), pair.b.has_edges()],
         scratch: crease::Scratch::take(),
         faces: [faces(0, pair.a.exact_planes()), faces(1, pair.b.exact_planes())],
+        flats: [faces(0, pair.a.exact_flat_faces()), faces(1, pair.b.exact_flat_faces())],
     };
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
@@ -696,6 +710,12 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     }
 }
 
+/// Whether two planes of the same body are one (a flat face seen from many points, or two
+/// nearby points of a curved one): the clip must not get a plane twice.
+fn same_plane(p: &Plane, q: &Plane, tol: Real) -> bool {
+    p.body == q.body && (p.n - q.n).length() <= 1e-12 && (p.h - q.h).abs() <= tol
+}
+
 /// Corner `c` of the unit cell (bits: x = 1, y = 2, z = 4).
 #[inline]
 fn corner(c: usize) -> Vector {
@@ -744,22 +764,42 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                     1
                 }
             };
-            // A polyhedron's own faces, not its tangent planes at samples.
-            let samples =
-                [0, 1].map(|s| if self.faces[s].is_some() { 0 } else { samples(s, inside[s]) });
+            // A polyhedron's own faces, not its tangent planes at samples; a body with flat
+            // faces those and its smooth part's plane at the centre, which the clip's rounds
+            // follow along the curved side ([`Cutter::follow_smooth_parts`]).
+            let samples = [0, 1].map(|s| {
+                if self.faces[s].is_some() {
+                    0
+                } else if self.flats[s].is_some() {
+                    usize::from(inside[s] != 0xFF)
+                } else {
+                    samples(s, inside[s])
+                }
+            });
             self.tangent_planes(c, samples, [ca, cb]);
             if !self.face_planes(c) {
                 return;
             }
             let mut clipped = crease::clip_cell(c[0].x, c[7].x, &mut self.scratch, false);
             let mut rounds = 0;
+            let mut follows = 0;
             while let Some(k) = clipped {
                 // Only a cell with no corner in both bodies can hold a polyhedron that misses
                 // the overlap altogether (two bodies apart by less than the planes' error).
-                if k.volume > 0.0 && in_a & in_b == 0 && rounds < REFINE_ROUNDS {
+                if k.volume > 0.0 && rounds < REFINE_ROUNDS {
                     let len = self.scratch.planes.len();
                     let centroid = k.moment / k.volume;
-                    if self.refine(samples.map(|n| n > 0), diagonal, centroid) {
+                    let clips = samples.map(|n| n > 0);
+                    if (in_a & in_b == 0 && self.refine(clips, diagonal, centroid))
+                        || (follows < FOLLOW_ROUNDS && {
+                            follows += 1;
+                            self.follow_smooth_parts(
+                                clips,
+                                diagonal,
+                                crease::tolerance(c[0].x, c[7].x),
+                            )
+                        })
+                    {
                         clipped = crease::clip_more(len, &mut self.scratch);
                         rounds += 1;
                         continue;
@@ -794,7 +834,8 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
     }
 
-    /// Adds to the cell's planes the faces of each polyhedral body that cut the cell `c`, and
+    /// Adds to the cell's planes the faces of each polyhedral body, and the flat faces of a body
+    /// that has them ([`Sdf::flat_faces`]), that cut the cell `c`, and
     /// those on its boundary whose facet the cell holds; `false` when a body does not reach
     /// into the cell (a face has the whole cell beyond it).
     ///
@@ -811,7 +852,8 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         let (lo, hi) = (c[0].x, c[7].x);
         let (mid, tol) = ((lo + hi) * 0.5, crease::tolerance(lo, hi));
         let pure = self.faces.iter().all(Option::is_some);
-        for (s, faces) in self.faces.iter().enumerate() {
+        let lists = self.faces.iter().enumerate().chain(self.flats.iter().enumerate());
+        for (s, faces) in lists {
             let Some(faces) = faces else { continue };
             for (p, spread) in faces {
                 let centre = p.n.dot(mid) - p.h;
@@ -894,10 +936,66 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         planes.len() > len
     }
 
+    /// Adds to the cell's planes the smooth part's tangent plane of each clipping body with flat
+    /// faces (`clips`) at every vertex of the last clipped polyhedron that lies outside that
+    /// part by more than [`REFINE_TOL`] of the cell's `diagonal` (`clip_tol` apart at least, so
+    /// the clip never gets one plane twice); whether it added any (none when they would not
+    /// all fit).
+    ///
+    /// The clip starts from the smooth part's plane at the cell's centre, which holds the part
+    /// with its curvature error; each round cuts off the vertices beyond it (a cutting-plane
+    /// iteration, as [`refine`](Self::refine)), so the polyhedron follows the curved side with
+    /// the planes it needs ([`FOLLOW_ROUNDS`] rounds), while the flat faces keep the edges
+    /// sharp. Both bodies are tested alike at every vertex and the clip sorts the planes, so
+    /// either labelling adds the same planes.
+    fn follow_smooth_parts(&mut self, clips: [bool; 2], diagonal: Real, clip_tol: Real) -> bool {
+        let curved = [0, 1].map(|s| clips[s] && self.flats[s].is_some());
+        if curved == [false; 2] {
+            return false;
+        }
+        let tol = REFINE_TOL * diagonal;
+        self.scratch.gather_vertices();
+        let mut planes = std::mem::take(&mut self.scratch.planes);
+        let len = planes.len();
+        let mut fits = true;
+        'vertices: for &x in &self.scratch.vertices {
+            for s in (0..2).filter(|&s| curved[s]) {
+                let (d, g) = self.smooth_part(s, x);
+                let g = g.normalize_or_zero();
+                if d > tol && g.is_finite() && g != Vector::ZERO {
+                    let plane = Plane { n: g, h: g.dot(x) - d, body: s };
+                    if planes[len..].iter().any(|q| same_plane(q, &plane, clip_tol)) {
+                        continue;
+                    }
+                    if planes.len() == crease::MAX_PLANES {
+                        fits = false;
+                        break 'vertices;
+                    }
+                    planes.push(plane);
+                }
+            }
+        }
+        if !fits {
+            planes.truncate(len);
+        }
+        self.scratch.planes = planes;
+        self.scratch.planes.len() > len
+    }
+
+    /// Distance and gradient of body `s`'s smooth part at `x` ([`Sdf::smooth_part`]).
+    fn smooth_part(&self, s: usize, x: Vector) -> (Real, Vector) {
+        if s == 0 {
+            self.pair.a.smooth_part(x)
+        } else {
+            self.pair.b.smooth_part(x)
+        }
+    }
+
     /// The tangent planes of each body at the first `samples` of the cell's centre (distances
     /// `centre`), its eight corners and its six face centres: an edge through the cell has
     /// points on each of its faces' sides among them, and a corner reaching in has its faces'
-    /// nearest points. They replace the scratch's planes.
+    /// nearest points. A body with flat faces gives its smooth part's planes
+    /// ([`Sdf::smooth_part`]). They replace the scratch's planes.
     fn tangent_planes(&mut self, c: &[Vert; 8], samples: [usize; 2], centre: [Real; 2]) {
         let mid = (c[0].x + c[7].x) * 0.5;
         let mut points = [(mid, centre); SAMPLES];
@@ -911,7 +1009,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             x[f % 3] = if f < 3 { c[0].x[f % 3] } else { c[7].x[f % 3] };
             let mut d = [Real::NAN; 2];
             for s in 0..2 {
-                if samples[s] == SAMPLES {
+                if samples[s] == SAMPLES && self.flats[s].is_none() {
                     let (ds, gs) = if s == 0 {
                         self.pair.a.distance_and_gradient(x)
                     } else {
@@ -927,6 +1025,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         planes.clear();
         let tol = crease::tolerance(c[0].x, c[7].x);
         for s in 0..2 {
+            let smooth = self.flats[s].is_some();
             for (k, &(x, d)) in points[..samples[s]].iter().enumerate() {
                 let gradient = |x: Vector| {
                     if s == 0 {
@@ -935,12 +1034,14 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                         self.pair.b.gradient(x)
                     }
                 };
-                let g = if k >= 9 {
-                    face_gradients[s][k - 9]
+                let (d, g) = if smooth {
+                    self.smooth_part(s, x)
+                } else if k >= 9 {
+                    (d[s], face_gradients[s][k - 9])
                 } else if (1..9).contains(&k) && c[k - 1].node() != NOT_A_NODE {
-                    self.cache.node_gradient(s, c[k - 1].node() as usize, || gradient(x))
+                    (d[s], self.cache.node_gradient(s, c[k - 1].node() as usize, || gradient(x)))
                 } else {
-                    gradient(x)
+                    (d[s], gradient(x))
                 };
                 // A user SDF's gradient may be a finite difference: the plane needs a unit normal.
                 let g = g.normalize_or_zero();
@@ -949,11 +1050,10 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 }
                 // Only planes that cut the cell, each once per body (a flat face is seen from
                 // many points): the same set whichever body is called A.
-                let plane = Plane { n: g, h: g.dot(x) - d[s], body: s };
-                let same = |q: &Plane| {
-                    q.body == s && (q.n - plane.n).length() <= 1e-12 && (q.h - plane.h).abs() <= tol
-                };
-                if crease::cuts(&plane, c[0].x, c[7].x, tol) && !planes.iter().any(same) {
+                let plane = Plane { n: g, h: g.dot(x) - d, body: s };
+                if crease::cuts(&plane, c[0].x, c[7].x, tol)
+                    && !planes.iter().any(|q| same_plane(q, &plane, tol))
+                {
                     planes.push(plane);
                 }
             }

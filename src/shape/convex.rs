@@ -471,6 +471,27 @@ impl Sdf for ConvexShape {
         }
     }
 
+    /// A cylinder's caps `y = ±h`.
+    fn flat_faces(&self) -> Option<Vec<(Vector, Real)>> {
+        match self {
+            Self::Cylinder { half_height, .. } => {
+                Some(vec![(Vector::Y, *half_height), (-Vector::Y, *half_height)])
+            }
+            _ => None,
+        }
+    }
+
+    /// A cylinder's infinite round side.
+    fn smooth_part(&self, p: Vector) -> (Real, Vector) {
+        match self {
+            Self::Cylinder { radius, .. } => {
+                let r = (p.x * p.x + p.z * p.z).sqrt();
+                (r - radius, if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X })
+            }
+            _ => self.distance_and_gradient(p),
+        }
+    }
+
     fn local_bounds(&self) -> Aabb {
         match self {
             Self::Ball { radius } => Aabb::new(Vector::splat(-radius), Vector::splat(*radius)),
