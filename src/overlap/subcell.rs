@@ -71,7 +71,8 @@ const MEMO: usize = 48;
 /// Points per body whose tangent planes clip a bent cell: corners, centre, face centres.
 const SAMPLES: usize = 15;
 
-/// Rounds of [`Cutter::refine`] at most per bent cell.
+/// Clip rounds at most per bent cell, of [`Cutter::refine`] and
+/// [`Cutter::follow_smooth_parts`] together.
 const REFINE_ROUNDS: usize = 16;
 
 /// Rounds of [`Cutter::follow_smooth_parts`] at most per bent cell. Each takes the planes to
@@ -603,6 +604,14 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                 .collect()
         })
     };
+    let planes = [pair.a.exact_planes(), pair.b.exact_planes()];
+    // A polyhedron's faces already bound it: flat faces count only for a body without them.
+    let flats = [
+        if planes[0].is_none() { pair.a.exact_flat_faces() } else { None },
+        if planes[1].is_none() { pair.b.exact_flat_faces() } else { None },
+    ];
+    let [planes_a, planes_b] = planes;
+    let [flats_a, flats_b] = flats;
     let mut cutter = Cutter {
         pair,
         cache: EdgeCache::new(values.len(), m),
@@ -612,8 +621,8 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         sums,
         edges: [pair.a.has_edges(), pair.b.has_edges()],
         scratch: crease::Scratch::take(),
-        faces: [faces(0, pair.a.exact_planes()), faces(1, pair.b.exact_planes())],
-        flats: [faces(0, pair.a.exact_flat_faces()), faces(1, pair.b.exact_flat_faces())],
+        faces: [faces(0, planes_a), faces(1, planes_b)],
+        flats: [faces(0, flats_a), faces(1, flats_b)],
     };
     let offsets = [0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1];
     let edges = cutter.edges;
@@ -710,6 +719,14 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     }
 }
 
+/// Body `body`'s tangent plane at `x`, where its distance is `d` and its gradient `g`: the plane
+/// through the nearest surface point, with `g` made unit (a user SDF's gradient may be a finite
+/// difference); `None` where the gradient has no direction.
+fn tangent_plane(x: Vector, d: Real, g: Vector, body: usize) -> Option<Plane> {
+    let n = g.normalize_or_zero();
+    (n.is_finite() && n != Vector::ZERO).then(|| Plane { n, h: n.dot(x) - d, body })
+}
+
 /// Whether two planes of the same body are one (a flat face seen from many points, or two
 /// nearby points of a curved one): the clip must not get a plane twice.
 fn same_plane(p: &Plane, q: &Plane, tol: Real) -> bool {
@@ -780,6 +797,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             if !self.face_planes(c) {
                 return;
             }
+            let clip_tol = crease::tolerance(c[0].x, c[7].x);
             let mut clipped = crease::clip_cell(c[0].x, c[7].x, &mut self.scratch, false);
             let mut rounds = 0;
             let mut follows = 0;
@@ -793,11 +811,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                     if (in_a & in_b == 0 && self.refine(clips, diagonal, centroid))
                         || (follows < FOLLOW_ROUNDS && {
                             follows += 1;
-                            self.follow_smooth_parts(
-                                clips,
-                                diagonal,
-                                crease::tolerance(c[0].x, c[7].x),
-                            )
+                            self.follow_smooth_parts(clips, diagonal, clip_tol)
                         })
                     {
                         clipped = crease::clip_more(len, &mut self.scratch);
@@ -907,14 +921,11 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         let cut = |x: Vector, d: [Real; 2], tol: Real, planes: &mut Vec<Plane>| {
             for s in (0..2).filter(|&s| clips[s] && d[s] > tol) {
                 let g = if s == 0 { pair.a.gradient(x) } else { pair.b.gradient(x) };
-                let g = g.normalize_or_zero();
-                if !(g.is_finite() && g != Vector::ZERO) {
-                    continue;
-                }
+                let Some(plane) = tangent_plane(x, d[s], g, s) else { continue };
                 if planes.len() == crease::MAX_PLANES {
                     return false;
                 }
-                planes.push(Plane { n: g, h: g.dot(x) - d[s], body: s });
+                planes.push(plane);
             }
             true
         };
@@ -961,18 +972,18 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         'vertices: for &x in &self.scratch.vertices {
             for s in (0..2).filter(|&s| curved[s]) {
                 let (d, g) = self.smooth_part(s, x);
-                let g = g.normalize_or_zero();
-                if d > tol && g.is_finite() && g != Vector::ZERO {
-                    let plane = Plane { n: g, h: g.dot(x) - d, body: s };
-                    if planes[len..].iter().any(|q| same_plane(q, &plane, clip_tol)) {
-                        continue;
-                    }
-                    if planes.len() == crease::MAX_PLANES {
-                        fits = false;
-                        break 'vertices;
-                    }
-                    planes.push(plane);
+                if d <= tol {
+                    continue;
                 }
+                let Some(plane) = tangent_plane(x, d, g, s) else { continue };
+                if planes[len..].iter().any(|q| same_plane(q, &plane, clip_tol)) {
+                    continue;
+                }
+                if planes.len() == crease::MAX_PLANES {
+                    fits = false;
+                    break 'vertices;
+                }
+                planes.push(plane);
             }
         }
         if !fits {
@@ -1009,7 +1020,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             x[f % 3] = if f < 3 { c[0].x[f % 3] } else { c[7].x[f % 3] };
             let mut d = [Real::NAN; 2];
             for s in 0..2 {
-                if samples[s] == SAMPLES && self.flats[s].is_none() {
+                if samples[s] == SAMPLES {
                     let (ds, gs) = if s == 0 {
                         self.pair.a.distance_and_gradient(x)
                     } else {
@@ -1043,14 +1054,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 } else {
                     (d[s], gradient(x))
                 };
-                // A user SDF's gradient may be a finite difference: the plane needs a unit normal.
-                let g = g.normalize_or_zero();
-                if !(g.is_finite() && g != Vector::ZERO) {
-                    continue;
-                }
+                let Some(plane) = tangent_plane(x, d, g, s) else { continue };
                 // Only planes that cut the cell, each once per body (a flat face is seen from
                 // many points): the same set whichever body is called A.
-                let plane = Plane { n: g, h: g.dot(x) - d, body: s };
                 if crease::cuts(&plane, c[0].x, c[7].x, tol)
                     && !planes.iter().any(|q| same_plane(q, &plane, tol))
                 {

@@ -99,7 +99,8 @@ pub trait Sdf: Send + Sync {
     /// The planes `(n, h)` of the flat faces (`n·p <= h` inside), when the body is a smooth
     /// convex body — its [`smooth_part`](Self::smooth_part) — cut by finitely many half-spaces
     /// whose faces meet the smooth surface in edges: a cylinder's two caps. `None` (the
-    /// default) otherwise; a polyhedron gives [`face_planes`](Self::face_planes) instead.
+    /// default) otherwise; a polyhedron gives [`face_planes`](Self::face_planes) instead (where
+    /// both are given, the face planes are used and these are not).
     ///
     /// On the sub-cell grid a cell such an edge passes through is clipped by the faces
     /// themselves and by the smooth part's tangent plane, which keep the edge sharp, instead
