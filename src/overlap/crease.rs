@@ -29,7 +29,8 @@ use crate::math::{Real, Vector};
 /// that would need more sends the cell back to the tetrahedra.
 const MAX_VERTS: usize = 256;
 
-/// Planes at most per cell: the samples' and those added by [`refine`](super::subcell).
+/// Planes at most per cell: the bodies' faces or flat faces that cut it, the tangent planes at
+/// samples, and those the refining and following rounds add (see [`subcell`](super::subcell)).
 pub(super) const MAX_PLANES: usize = 64;
 
 /// Faces at most: the cell's six and one per plane.

@@ -269,20 +269,30 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         }
     }
 
-    /// The body's flat faces ([`Sdf::flat_faces`]) in the pair's frame when they and its smooth
-    /// part bound exactly the body its SDF describes: without enlargement (an enlarged
-    /// cylinder's rims are round).
+    /// The body's flat faces in the pair's frame, which with its
+    /// [`smooth_part`](Self::smooth_part) bound exactly the body its SDF describes. Without
+    /// enlargement those of [`Sdf::flat_faces`] (a cylinder's caps). Enlarged by `ε`, a body
+    /// with face planes or flat faces is rounded along its edges and corners, and its faces,
+    /// moved out by `ε`, are the flat parts of its surface: they are its flat faces, and the
+    /// whole enlarged body is its smooth part.
     fn exact_flat_faces(&self) -> Option<Vec<(Vector, Real)>> {
         if self.eps == 0.0 {
             self.placed(self.shape.flat_faces()?)
         } else {
-            None
+            self.placed(self.shape.face_planes().or_else(|| self.shape.flat_faces())?)
         }
     }
 
-    /// Distance and gradient of the body's smooth part at `x` ([`Sdf::smooth_part`]).
+    /// Distance and gradient at `x` of the body's smooth part, the convex body its
+    /// [`exact_flat_faces`](Self::exact_flat_faces) cut down to it: without enlargement
+    /// [`Sdf::smooth_part`], enlarged the enlarged body itself.
     fn smooth_part(&self, x: Vector) -> (Real, Vector) {
-        let (d, g) = self.shape.smooth_part(self.rot_t * (x - self.origin));
+        let local = self.rot_t * (x - self.origin);
+        let (d, g) = if self.eps == 0.0 {
+            self.shape.smooth_part(local)
+        } else {
+            self.shape.distance_and_gradient(local)
+        };
         (d - self.eps, self.rot * g)
     }
 

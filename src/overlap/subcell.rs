@@ -20,7 +20,9 @@
 //! there, and a cell that only polyhedral surfaces pass through is clipped by their faces
 //! without the test: a pair of polyhedra is integrated exactly. A smooth body cut by flat faces
 //! ([`Sdf::flat_faces`], a cylinder, not enlarged) clips by those faces and its smooth part's
-//! tangent plane, so its edges stay sharp.
+//! tangent plane, so its edges stay sharp; so does an enlarged polyhedron or cylinder, whose
+//! faces moved out by the enlargement are the flat parts of its rounded surface and the whole
+//! enlarged body its smooth part, so its rounding is followed, not bevelled.
 //!
 //! Root finding instead of interpolating SDF values matters: inside a cylinder or a box the
 //! SDF has kinks (the nearest face changes), where interpolated values would misplace the
@@ -78,8 +80,8 @@ const REFINE_ROUNDS: usize = 16;
 /// Rounds of [`Cutter::follow_smooth_parts`] at most per bent cell. Each takes the planes to
 /// the vertices that still poke out of a curved side; two bring the side's outer error to the
 /// order of the interpolated cells' inner one (both second order in the cell's size), and more
-/// would make the rim's cells exact at several times their cost while the rest of the overlap
-/// keeps its error.
+/// would bring the rim's cells within [`REFINE_TOL`] of the side at several times their cost
+/// while the rest of the overlap keeps its error.
 const FOLLOW_ROUNDS: usize = 2;
 
 /// A vertex of a bent cell's polyhedron farther than this fraction of the cell's diagonal
@@ -252,9 +254,9 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     /// them (the body within the cell exactly) instead of by tangent planes at samples.
     /// Each face comes with its spread over a cell, `|n|·h/2`: the cells all have the same size.
     faces: [Option<Vec<(Plane, Real)>>; 2],
-    /// Each body's flat faces when it is a smooth body cut by planes ([`Sdf::flat_faces`]),
-    /// with their spreads as for `faces`: its bent cells are clipped by those that cut them and
-    /// by its smooth part's tangent planes.
+    /// Each body's flat faces when it is a smooth body cut by planes ([`Sdf::flat_faces`]) or an
+    /// enlarged body with faces (its faces moved out), with their spreads as for `faces`: its
+    /// bent cells are clipped by those that cut them and by its smooth part's tangent planes.
     flats: [Option<Vec<(Plane, Real)>>; 2],
 }
 
