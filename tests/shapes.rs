@@ -337,6 +337,39 @@ fn bounding_spheres_enclose_the_body_and_touch_it() {
     }
 }
 
+/// A cone is its infinite cone cut by its base, and a rounded cuboid its own rounded body with
+/// its faces moved out: in both the flat faces and the smooth part bound exactly the body its
+/// distance describes, the smooth part's distance is exact (a unit gradient, and the point it
+/// leads to lies on its surface), and each flat face touches the body (the body reaches it).
+#[test]
+fn a_cone_and_a_rounded_cuboid_are_a_smooth_part_cut_by_flat_faces() {
+    let cone = ConvexShape::cone(0.3, 0.2).unwrap();
+    let cuboid = ConvexShape::cuboid(Vector::new(0.3, 0.2, 0.1)).unwrap();
+    let rounded = ConvexShape::rounded(cuboid, 0.05).unwrap();
+    for (name, shape, faces) in [("cone", &cone, 1), ("rounded cuboid", &rounded, 6)] {
+        let flats = shape.flat_faces().expect("flat faces");
+        assert_eq!(flats.len(), faces, "{name}");
+        let mut rng = Lcg(11);
+        let mut reach = vec![Real::NEG_INFINITY; flats.len()];
+        for _ in 0..20000 {
+            let p = rng.point(0.6);
+            let (d, g) = shape.smooth_part(p);
+            assert!((g.length() - 1.0).abs() < 1e-12, "{name} at {p:?}: gradient {g:?}");
+            let foot = p - g * d;
+            assert!(shape.smooth_part(foot).0.abs() < 1e-12, "{name}: {p:?} leads off the surface");
+            let inside = d <= 0.0 && flats.iter().all(|&(n, h)| n.dot(p) <= h);
+            assert_eq!(inside, shape.distance(p) <= 0.0, "{name} at {p:?}");
+            if shape.distance(p) <= 0.0 {
+                for (r, &(n, h)) in reach.iter_mut().zip(&flats) {
+                    *r = r.max(n.dot(p) - h);
+                }
+            }
+        }
+        // Sampled interior points come within a few per cent of the body's size of each face.
+        assert!(reach.iter().all(|&r| r > -0.03), "{name}: a face the body does not reach");
+    }
+}
+
 /// A cylinder's flat faces and its smooth part bound exactly the body its distance describes:
 /// a point is inside the cylinder when it is inside the infinite round cylinder and below
 /// both caps, and the smooth part's distance is the distance to that round side.

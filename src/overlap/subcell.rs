@@ -19,8 +19,8 @@
 //! between the nodes. A polyhedron ([`Sdf::face_planes`], not enlarged) clips by its own faces
 //! there, and a cell that only polyhedral surfaces pass through is clipped by their faces
 //! without the test: a pair of polyhedra is integrated exactly. A smooth body cut by flat faces
-//! ([`Sdf::flat_faces`], a cylinder, not enlarged) clips by those faces and its smooth part's
-//! tangent plane, so its edges stay sharp; so does an enlarged polyhedron or cylinder, whose
+//! ([`Sdf::flat_faces`], a cylinder or a cone, not enlarged) clips by those faces and its smooth
+//! part's tangent plane, so its edges stay sharp; so does an enlarged polyhedron or cylinder, whose
 //! faces moved out by the enlargement are the flat parts of its rounded surface and the whole
 //! enlarged body its smooth part, so its rounding is followed, not bevelled.
 //!

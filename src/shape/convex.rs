@@ -471,22 +471,61 @@ impl Sdf for ConvexShape {
         }
     }
 
-    /// A cylinder's caps `y = ±h`.
+    /// A cylinder's caps `y = ±h`; a cone's base `y = −h`; a rounded shape's inner faces (or flat faces) moved out by
+    /// the border radius, the flat parts of its surface (its smooth part is then the whole
+    /// rounded body).
     fn flat_faces(&self) -> Option<Vec<(Vector, Real)>> {
         match self {
             Self::Cylinder { half_height, .. } => {
                 Some(vec![(Vector::Y, *half_height), (-Vector::Y, *half_height)])
             }
+            Self::Cone { half_height, .. } => Some(vec![(-Vector::Y, *half_height)]),
+            Self::Rounded { inner, border_radius } => Some(
+                inner
+                    .face_planes()
+                    .or_else(|| inner.flat_faces())?
+                    .into_iter()
+                    .map(|(n, h)| (n, h + border_radius * n.length()))
+                    .collect(),
+            ),
             _ => None,
         }
     }
 
-    /// A cylinder's infinite round side.
+    /// A cylinder's infinite round side; a cone's infinite cone, from its apex; a rounded shape
+    /// itself.
     fn smooth_part(&self, p: Vector) -> (Real, Vector) {
         match self {
             Self::Cylinder { radius, .. } => {
                 let r = (p.x * p.x + p.z * p.z).sqrt();
                 (r - radius, if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X })
+            }
+            Self::Cone { half_height, radius } => {
+                // In the half-plane (r, y) the infinite cone is a wedge with its apex at
+                // (0, h), its side running down through the base's rim (R, −h): along `t`,
+                // outward normal `n`. A point whose projection on that side falls above the
+                // apex is nearest the apex.
+                let r = (p.x * p.x + p.z * p.z).sqrt();
+                let radial = if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X };
+                let side = radius.hypot(2.0 * half_height);
+                let (t, n) = (
+                    [radius / side, -2.0 * half_height / side],
+                    [2.0 * half_height / side, radius / side],
+                );
+                let q = [r, p.y - half_height];
+                if q[0] * t[0] + q[1] * t[1] < 0.0 {
+                    let l = q[0].hypot(q[1]);
+                    (
+                        l,
+                        if l > 0.0 {
+                            radial * (q[0] / l) + Vector::Y * (q[1] / l)
+                        } else {
+                            Vector::Y
+                        },
+                    )
+                } else {
+                    (q[0] * n[0] + q[1] * n[1], radial * n[0] + Vector::Y * n[1])
+                }
             }
             _ => self.distance_and_gradient(p),
         }

@@ -98,22 +98,24 @@ pub trait Sdf: Send + Sync {
 
     /// The planes `(n, h)` of the flat faces (`n·p <= h` inside), when the body is a smooth
     /// convex body — its [`smooth_part`](Self::smooth_part) — cut by finitely many half-spaces
-    /// whose faces meet the smooth surface in edges: a cylinder's two caps. `None` (the
+    /// whose faces meet the smooth surface in edges: a cylinder's two caps. Also the flat parts
+    /// of a rounded body (a polyhedron or a cylinder dilated by a radius: its faces moved out),
+    /// which touch its rounded edges, the whole body being its smooth part. `None` (the
     /// default) otherwise; a polyhedron gives [`face_planes`](Self::face_planes) instead (where
     /// both are given, the face planes are used and these are not).
     ///
     /// On the sub-cell grid a cell such an edge passes through is clipped by the faces
-    /// themselves and by the smooth part's tangent plane, which keep the edge sharp, instead
-    /// of by the whole body's tangent planes at fifteen points, whose envelope bevels it at a
-    /// cost of a dozen more planes per cell. The faces and the smooth part must bound exactly
-    /// the body [`distance`](Self::distance) describes.
+    /// themselves and by the smooth part's tangent planes, which keep the edge sharp (or follow
+    /// the rounding), instead of by the whole body's tangent planes at fifteen points, whose
+    /// envelope bevels it at a cost of a dozen more planes per cell. The faces and the smooth
+    /// part must bound exactly the body [`distance`](Self::distance) describes.
     fn flat_faces(&self) -> Option<Vec<(Vector, Real)>> {
         None
     }
 
     /// Signed distance and outward unit gradient at `p` of the body's smooth part: the body
     /// without its [`flat_faces`](Self::flat_faces) (for a cylinder, the infinite round
-    /// cylinder). Asked only of bodies that have flat faces; the default is the body's own.
+    /// cylinder; for a cone, the infinite cone; for a rounded body, the body itself). Asked only of bodies that have flat faces; the default is the body's own.
     ///
     /// Contract: the exact signed distance of a convex body that holds the whole body (so its
     /// tangent planes hold the body, as the clip needs), and which the flat faces cut down to
