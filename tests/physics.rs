@@ -82,8 +82,9 @@ fn a_cylinders_rim_below_a_tilted_floor_is_integrated_sharp() {
 
 /// A cone standing on its base, pressed into the floor: the overlap is a frustum,
 /// `V = π d (R² + R r + r²) / 3` with `r` the radius at the floor. Its rim runs round the base's
-/// edge, whose cells are clipped by the base and the cone's side, within `1 % (2/N_c)²` (the
-/// whole body's tangent planes at sample points bevel the edge: 2.5 % too much at `N_c` = 2).
+/// edge, whose cells are clipped by the base and the cone's side, within `1 % (2/N_c)²`. (A
+/// cell clipped by the whole body's tangent planes at sample points instead bevels the edge
+/// and fails the bound.)
 #[test]
 fn a_cones_base_below_the_floor_is_integrated_sharp() {
     let (half_height, big, depth) = (0.03, 0.02, 0.002);
@@ -102,14 +103,15 @@ fn a_cones_base_below_the_floor_is_integrated_sharp() {
 }
 
 /// An enlarged cube (`ε` round its faces: rounded edges and corners), or a cube rounded by `ε`,
-/// standing on an edge turned 45° onto a floor, turned about the vertical so that the grid meets it at no particular
-/// angle, and pressed in by less than its edge's rounding reaches: the overlap is the rounded
-/// edge's circular segment along the edge plus a spherical cap shared by its two ends,
-/// `V = L (ε² acos(1 − p/ε) − (ε − p) √(2εp − p²)) + π p² (3ε − p) / 3`. The rounded edge runs
-/// through the cells the overlap's rim passes; those are clipped by the faces moved out by `ε`
-/// and the rounded edge's tangent planes, within `1 % (4/N_c)^1.5`, and the normal is the
-/// floor's. (The enlarged body's tangent planes at sample points bevel the rounding: 3.6 % too
-/// much at `N_c` = 4.)
+/// standing on an edge turned 45° onto a floor, turned about the vertical so that the grid
+/// meets it at no particular angle, and pressed in by less than its edge's rounding reaches:
+/// the overlap is the rounded edge's circular segment along the edge plus a spherical cap
+/// shared by its two ends,
+/// `V = L (ε² acos(1 − p/ε) − (ε − p) √(2εp − p²)) + π p² (3ε − p) / 3`. The rounded edge
+/// runs through the cells the overlap's rim passes; those are clipped by the faces moved out
+/// by `ε` and the rounded edge's tangent planes, within `1 % (4/N_c)^1.5`, and the normal is the
+/// floor's. (A cell clipped by the enlarged body's tangent planes at sample points instead
+/// bevels the rounding and fails the bound.)
 #[test]
 fn an_enlarged_cubes_rounded_edge_is_integrated_sharp() {
     let (half, eps, p) = (0.01, 0.005, 0.001);
@@ -203,7 +205,8 @@ fn force_is_invariant_under_a_rigid_motion_of_the_pair() {
     );
     let r = motion.rotation;
     for mode in [IntegrationMode::Count, IntegrationMode::Subcell] {
-        // Counting moves by a node where round-off moves one across the enlarged surface.
+        // Counting is left out with the enlargement: where the counted box's face lies on a
+        // body's enlarged face, a whole node layer sits on it and round-off decides the layer.
         let enlargements = if mode == IntegrationMode::Count { 1 } else { 2 };
         for &enlargement in &ENLARGEMENTS[..enlargements] {
             let m = enlarged_model(mode, 8, 0.8, enlargement);

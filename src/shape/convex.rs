@@ -10,6 +10,13 @@ use crate::error::{check_finite_vec, check_positive, Error, Result};
 use crate::math::{Real, Vector};
 
 /// Exact 2D signed distance to a convex polygon given counter-clockwise, with its gradient.
+/// The distance of `p` from the y axis and the unit vector away from it (`x` on the axis): a
+/// round body's meridian coordinate `r` and the direction it grows in.
+fn radial(p: Vector) -> (Real, Vector) {
+    let r = (p.x * p.x + p.z * p.z).sqrt();
+    (r, if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X })
+}
+
 fn polygon_sdf_2d(p: [Real; 2], poly: &[[Real; 2]]) -> (Real, [Real; 2]) {
     let n = poly.len();
     let mut inside_max = Real::NEG_INFINITY;
@@ -316,9 +323,8 @@ impl ConvexShape {
                 }
             }
             Self::Cylinder { half_height, radius } => {
-                let r = (p.x * p.x + p.z * p.z).sqrt();
+                let (r, radial) = radial(p);
                 let (qx, qy) = (r - radius, p.y.abs() - half_height);
-                let radial = if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X };
                 let axial = Vector::new(0.0, p.y.signum(), 0.0);
                 let (ox, oy) = (qx.max(0.0), qy.max(0.0));
                 let out = (ox * ox + oy * oy).sqrt();
@@ -331,10 +337,9 @@ impl ConvexShape {
                 }
             }
             Self::Cone { half_height, radius } => {
-                let r = (p.x * p.x + p.z * p.z).sqrt();
+                let (r, radial) = radial(p);
                 let tri = [[-radius, -half_height], [*radius, -half_height], [0.0, *half_height]];
                 let (d, g) = polygon_sdf_2d([r, p.y], &tri);
-                let radial = if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X };
                 (d, radial * g[0] + Vector::Y * g[1])
             }
             Self::Capsule { a, b, radius } => {
@@ -471,9 +476,9 @@ impl Sdf for ConvexShape {
         }
     }
 
-    /// A cylinder's caps `y = ±h`; a cone's base `y = −h`; a rounded shape's inner faces (or flat faces) moved out by
-    /// the border radius, the flat parts of its surface (its smooth part is then the whole
-    /// rounded body).
+    /// A cylinder's caps `y = ±h`; a cone's base `y = −h`; a rounded shape's inner faces (or
+    /// flat faces) moved out by the border radius, the flat parts of its surface (its smooth
+    /// part is then the whole rounded body).
     fn flat_faces(&self) -> Option<Vec<(Vector, Real)>> {
         match self {
             Self::Cylinder { half_height, .. } => {
@@ -497,16 +502,15 @@ impl Sdf for ConvexShape {
     fn smooth_part(&self, p: Vector) -> (Real, Vector) {
         match self {
             Self::Cylinder { radius, .. } => {
-                let r = (p.x * p.x + p.z * p.z).sqrt();
-                (r - radius, if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X })
+                let (r, radial) = radial(p);
+                (r - radius, radial)
             }
             Self::Cone { half_height, radius } => {
                 // In the half-plane (r, y) the infinite cone is a wedge with its apex at
                 // (0, h), its side running down through the base's rim (R, −h): along `t`,
                 // outward normal `n`. A point whose projection on that side falls above the
                 // apex is nearest the apex.
-                let r = (p.x * p.x + p.z * p.z).sqrt();
-                let radial = if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X };
+                let (r, radial) = radial(p);
                 let side = radius.hypot(2.0 * half_height);
                 let (t, n) = (
                     [radius / side, -2.0 * half_height / side],

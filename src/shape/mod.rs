@@ -89,9 +89,10 @@ pub trait Sdf: Send + Sync {
     /// body is the intersection of finitely many half-spaces (for the exact overlap of
     /// [`OverlapSettings::with_exact_polyhedra`](crate::OverlapSettings::with_exact_polyhedra),
     /// and on the sub-cell grid, whose cells such a body clips by the faces that cut them, moved
-    /// out by the contact enlargement where there is one); `None` (the default) otherwise. The planes must bound exactly the body
-    /// [`distance`](Self::distance) describes. The normal need not be unit (the overlap scales `n` and
-    /// `h` together); a zero or non-finite plane sends the pair to the `N_c` grid instead.
+    /// out by the contact enlargement where there is one); `None` (the default) otherwise. The
+    /// planes must bound exactly the body [`distance`](Self::distance) describes. The normal
+    /// need not be unit (the overlap scales `n` and `h` together); a zero or non-finite plane
+    /// sends the pair to the `N_c` grid instead.
     fn face_planes(&self) -> Option<Vec<(Vector, Real)>> {
         None
     }
@@ -115,7 +116,8 @@ pub trait Sdf: Send + Sync {
 
     /// Signed distance and outward unit gradient at `p` of the body's smooth part: the body
     /// without its [`flat_faces`](Self::flat_faces) (for a cylinder, the infinite round
-    /// cylinder; for a cone, the infinite cone; for a rounded body, the body itself). Asked only of bodies that have flat faces; the default is the body's own.
+    /// cylinder; for a cone, the infinite cone; for a rounded body, the body itself). Asked
+    /// only of bodies that have flat faces; the default is the body's own.
     ///
     /// Contract: the exact signed distance of a convex body that holds the whole body (so its
     /// tangent planes hold the body, as the clip needs), and which the flat faces cut down to
