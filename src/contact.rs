@@ -10,12 +10,12 @@
 //! indentation by the approach (how far A's material at the contact point moved along the
 //! normal), the volume along the overlap's own power law `V ∝ d^p` (a flat punch's `p = 1`, a
 //! cap's or an edge's 2, a corner's 3: the secant of the last two full evaluations, or at
-//! first the shape measure the stiffness uses), the contact
-//! point as between two balls about the bodies' centres and across the contact plane as a
-//! tilt of the surfaces moves the overlap's centroid (by the overlap's footprint,
+//! first the shape measure the stiffness uses), the contact point as between two balls about
+//! the bodies' centres (a body flat at the contact — a face under a ball or a cylinder's side —
+//! as a half-space: the point goes with the curved body) and across the contact plane as a tilt
+//! of the surfaces moves the overlap's centroid (by the overlap's footprint,
 //! [`OverlapGeometry::footprint`]), the normal as the surfaces' own normals at the contact point
-//! turn. First touch, a
-//! contact whose update would part the bodies, and any motion beyond the bound get a full
+//! turn. First touch, a contact whose update would part the bodies, and any motion beyond the bound get a full
 //! evaluation. The rule reads only the contact's state, so results do not depend on the
 //! thread count and a checkpoint resumes bit-identically.
 
@@ -96,7 +96,8 @@ pub struct Reference {
     /// the contact point as it would move between two balls about these centres.
     pub centres: [Vector; 2],
     /// The distances of [`centres`](Self::centres) from the contact point (m), infinite for an
-    /// unbounded body (a half-space).
+    /// unbounded body (a half-space) and for a body flat at the contact point (a face) against
+    /// one that is not.
     pub radii: [Real; 2],
     /// Volume (m³).
     pub volume: Real,
@@ -295,6 +296,33 @@ fn surface_gradients<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 ) -> [Vector; 2] {
     [relative.rotation * a.gradient(relative.inverse_transform_point(x)), b.gradient(x)]
 }
+
+/// Whether each body (A, B) is flat at `x` (B's frame, A at `relative` in it), where its
+/// distance gradients are `gradients`: whether they stay the same (within round-off) at the
+/// points `step` away from `x` along two directions across the `normal` — a polyhedron's or
+/// a cylinder's face, not a ball, a curved side, or an edge within `step`.
+fn flat_at<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    shapes: (&A, &B),
+    relative: &Pose,
+    x: Vector,
+    normal: Vector,
+    step: Real,
+    gradients: [Vector; 2],
+) -> [bool; 2] {
+    let (u, v) = normal.any_orthonormal_pair();
+    let mut flat = [step > 0.0; 2];
+    for y in [x + u * step, x + v * step] {
+        let g = surface_gradients(shapes, relative, y);
+        for s in 0..2 {
+            flat[s] &= (g[s] - gradients[s]).length() <= FLAT;
+        }
+    }
+    flat
+}
+
+/// Change of a unit gradient below which two points lie on one flat face (round-off of the
+/// frame transform).
+const FLAT: Real = 1e-9;
 
 /// How much more a tilt counts than an approach against the normal allowance between nearly
 /// parallel surfaces. An update moves the centroid and the volume as a tilt does to first
@@ -544,14 +572,24 @@ impl ContactModel {
                 Real::INFINITY
             }
         };
-        let (r_a, r_b) =
+        let (mut r_a, mut r_b) =
             (radius(sphere_a, relative.transform_point(sphere_a.0)), radius(sphere_b, sphere_b.0));
+        let gradients = surface_gradients((a.shape, b.shape), &relative, contact_point);
+        // A body flat at the contact (a face) under a curved one: the contact point moves as
+        // against a half-space, with the curved body (a ball sliding or rolling on a face
+        // takes it along; a face moving over a ball leaves it at the ball).
+        match flat_at((a.shape, b.shape), &relative, contact_point, normal, 0.5 * reach, gradients)
+        {
+            [false, true] => r_b = Real::INFINITY,
+            [true, false] => r_a = Real::INFINITY,
+            _ => {}
+        }
         let centres = [sphere_a.0, sphere_b.0];
         Reference {
             relative,
             contact_point,
             normal,
-            gradients: surface_gradients((a.shape, b.shape), &relative, contact_point),
+            gradients,
             centres,
             radii: [r_a, r_b],
             volume: g.volume,

@@ -1214,3 +1214,54 @@ fn curved_edges_apart_by_less_than_a_coarse_cell_are_not_joined() {
     }
     assert_eq!(apart, 750);
 }
+
+/// A ball rolling over a flat face is updated between full evaluations as on a half-space: a
+/// face is flat at the contact, so the contact point goes along with the ball and the surfaces
+/// do not tilt against each other (as between two balls about the bodies' centres, the contact
+/// point would lag the ball and the ball's normal there turn). Over the same roll on a cube's
+/// top face, no more full evaluations than on a half-space, and the updated forces as close to
+/// full evaluations' as there (the grid's own scatter as the overlap moves across it).
+#[test]
+fn a_ball_rolling_on_a_face_is_updated_as_on_a_half_space() {
+    let m = Material::new(1e8, 0.3).unwrap();
+    let model = ContactModel::new(
+        PairParameters::new(&m, &m, 0.8).unwrap(),
+        settings(4, IntegrationMode::Subcell),
+    );
+    let reuse = discrete_contact::contact::GEOMETRY_REUSE;
+    let reused = model.with_geometry_reuse(reuse).unwrap();
+    let (r, depth) = (0.01, 1e-4);
+    let ball = ConvexShape::ball(r).unwrap();
+    let plane = ConvexShape::half_space(Vector::Y).unwrap();
+    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
+    let floors = [(&plane, Pose::IDENTITY), (&cube, Pose::from_translation(-r * Vector::Y))];
+    let mut runs = Vec::new();
+    for (floor, pose) in floors {
+        let wall = BodyState::at_rest(floor, pose);
+        let (mut state, mut full, mut worst) = (None, 0, 0.0f64);
+        // 2 mm of roll in 1 µm steps, the ball turning as it rolls.
+        for i in 0..2000 {
+            let x = i as f64 * 1e-6;
+            let at =
+                Pose::from_parts(Vector::new(x, r - depth, 0.0), Rotation::from_rotation_z(-x / r));
+            let body = BodyState::at_rest(&ball, at);
+            let out = reused.evaluate(&body, &wall, &mut state).unwrap().unwrap();
+            full += usize::from(out.full);
+            let exact = model.evaluate(&body, &wall, &mut None).unwrap().unwrap();
+            let err = (out.force.force_on_a - exact.force.force_on_a).length()
+                / exact.force.force_on_a.length();
+            worst = worst.max(err);
+        }
+        runs.push((full, worst));
+    }
+    let [(full_plane, worst_plane), (full_cube, worst_cube)] = [runs[0], runs[1]];
+    println!(
+        "full evaluations over the roll: half-space {full_plane}, cube {full_cube}; worst force \
+         error {worst_plane:.3e} / {worst_cube:.3e}"
+    );
+    assert!(
+        full_cube <= full_plane + 1,
+        "full evaluations {full_cube}, on a half-space {full_plane}"
+    );
+    assert!(worst_cube <= 1.1 * worst_plane, "force off by {worst_cube:.3e} ({worst_plane:.3e})");
+}
