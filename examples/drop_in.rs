@@ -5,7 +5,7 @@
 //! settles, and writes `target/validation/drop_in.csv`.
 //!
 //! `cargo run --release --example drop_in [-- --bodies 180 --seconds 1.0 --nc 4 --per-contact 6 --reuse 0.25]`
-//! (about four minutes on 2 cores; the run time grows with bodies × seconds). `--exact` computes
+//! (about a minute on 2 cores; the run time grows with bodies × seconds). `--exact` computes
 //! the sphere pairs (and spheres on the floor) in closed form and the pairs of cubes, convex
 //! polyhedra, walls and the plank as exact polyhedra; the rest (cylinders, sphere–box) on the
 //! grid. `--reuse f` sets the geometry reuse (0: every contact evaluated in full on every

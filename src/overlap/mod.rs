@@ -279,7 +279,7 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         if self.eps == 0.0 {
             self.placed(self.shape.flat_faces()?)
         } else {
-            self.placed(self.shape.face_planes().or_else(|| self.shape.flat_faces())?)
+            self.placed(crate::shape::flat_parts(self.shape)?)
         }
     }
 

@@ -486,9 +486,7 @@ impl Sdf for ConvexShape {
             }
             Self::Cone { half_height, .. } => Some(vec![(-Vector::Y, *half_height)]),
             Self::Rounded { inner, border_radius } => Some(
-                inner
-                    .face_planes()
-                    .or_else(|| inner.flat_faces())?
+                super::flat_parts(inner.as_ref())?
                     .into_iter()
                     .map(|(n, h)| (n, h + border_radius * n.length()))
                     .collect(),

@@ -24,6 +24,14 @@ pub use convex::ConvexShape;
 pub use custom::CustomSdf;
 pub use polyhedron::PolyhedronSdf;
 
+/// Where `shape` is flat: its [`face_planes`](Sdf::face_planes) when it is a polyhedron, else
+/// its [`flat_faces`](Sdf::flat_faces) (a cylinder's caps); `None` for a body with neither. The
+/// body dilated by a radius (rounded, or enlarged for contact) is flat on these planes moved out
+/// by the radius, and rounded elsewhere.
+pub(crate) fn flat_parts<S: Sdf + ?Sized>(shape: &S) -> Option<Vec<(Vector, Real)>> {
+    shape.face_planes().or_else(|| shape.flat_faces())
+}
+
 /// A signed distance function of a convex body, in the body's own frame.
 pub trait Sdf: Send + Sync {
     /// Signed distance from `p` (body frame) to the surface: negative inside.
