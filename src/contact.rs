@@ -15,9 +15,9 @@
 //! as a half-space: the point goes with the curved body) and across the contact plane as a tilt
 //! of the surfaces moves the overlap's centroid (by the overlap's footprint,
 //! [`OverlapGeometry::footprint`]), the normal as the surfaces' own normals at the contact point
-//! turn. First touch, a contact whose update would part the bodies, and any motion beyond the bound get a full
-//! evaluation. The rule reads only the contact's state, so results do not depend on the
-//! thread count and a checkpoint resumes bit-identically.
+//! turn. First touch, a contact whose update would part the bodies, and any motion beyond the
+//! bound get a full evaluation. The rule reads only the contact's state, so results do not
+//! depend on the thread count and a checkpoint resumes bit-identically.
 
 use parry3d_f64::bounding_volume::Aabb;
 
