@@ -635,18 +635,25 @@ fn geometry_reuse_moves_the_contact_point_as_a_tilt_does() {
     }
 }
 
+/// A sub-cell model at `N_c = n` for two bodies of Young's modulus `e_mod` and Poisson's
+/// ratio `nu` (restitution 0.8) evaluating every contact in full, and the same with the default
+/// geometry reuse.
+fn full_and_reused(e_mod: f64, nu: f64, n: usize) -> (ContactModel, ContactModel) {
+    let m = Material::new(e_mod, nu).unwrap();
+    let full = ContactModel::new(
+        PairParameters::new(&m, &m, 0.8).unwrap(),
+        settings(n, IntegrationMode::Subcell),
+    );
+    (full, full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap())
+}
+
 /// Geometry reuse measures the approach where the bodies meet, not along the line of their
 /// centres: a cube resting near the end of a long plank (the line of the centres nearly along
 /// the plank) pressed 3 µm further in is updated as a full evaluation gives it, and slid along
 /// the plank it is updated without a full evaluation and without parting.
 #[test]
 fn geometry_reuse_takes_the_approach_at_the_contact_on_a_long_body() {
-    let mat = Material::new(5e8, 0.35).unwrap();
-    let full = ContactModel::new(
-        PairParameters::new(&mat, &mat, 0.8).unwrap(),
-        settings(6, IntegrationMode::Subcell),
-    );
-    let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
+    let (full, reuse) = full_and_reused(5e8, 0.35, 6);
     let r = 0.005;
     let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
     let plank = ConvexShape::cuboid(Vector::new(0.1, 0.005, 0.02)).unwrap();
@@ -1223,13 +1230,7 @@ fn curved_edges_apart_by_less_than_a_coarse_cell_are_not_joined() {
 /// full evaluations' as there (the grid's own scatter as the overlap moves across it).
 #[test]
 fn a_ball_rolling_on_a_face_is_updated_as_on_a_half_space() {
-    let m = Material::new(1e8, 0.3).unwrap();
-    let model = ContactModel::new(
-        PairParameters::new(&m, &m, 0.8).unwrap(),
-        settings(4, IntegrationMode::Subcell),
-    );
-    let reuse = discrete_contact::contact::GEOMETRY_REUSE;
-    let reused = model.with_geometry_reuse(reuse).unwrap();
+    let (model, reused) = full_and_reused(1e8, 0.3, 4);
     let (r, depth) = (0.01, 1e-4);
     let ball = ConvexShape::ball(r).unwrap();
     let plane = ConvexShape::half_space(Vector::Y).unwrap();
