@@ -8,7 +8,7 @@
 //! while the pair's relative motion since then stays small against the indentation and the
 //! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead: the
 //! indentation by the approach (how far A's material at the contact point moved along the
-//! normal), the volume along the overlap's own power law `V ∝ d^p` (a flat punch's `p = 1`, a
+//! normal; a ball's centre, whose turning moves no surface), the volume along the overlap's own power law `V ∝ d^p` (a flat punch's `p = 1`, a
 //! cap's or an edge's 2, a corner's 3: the secant of the last two full evaluations, or at
 //! first the shape measure the stiffness uses), the contact point as between two balls about
 //! the bodies' centres (a body flat at the contact — a face under a ball or a cylinder's side —
@@ -142,7 +142,9 @@ impl Reference {
         let chord = 2.0 * Vector::new(q.x, q.y, q.z).length();
         // A's material at the contact point: its move across the contact plane and along the
         // normal into B (the approach).
-        let shift = self.material_shift(&motion);
+        // A ball's surface moves with its centre alone: its own turning moves no surface.
+        let ball_a = shapes.0.sphere_radius().is_some();
+        let shift = if ball_a { self.centre_a(&motion).1 } else { self.material_shift(&motion) };
         let (across, approach) = (self.in_plane(shift).length(), -shift.dot(self.normal));
         // The local indentation changes by the approach plus the tilt of the surfaces across
         // the overlap: how far their normals at the contact point turned against each other
@@ -155,8 +157,16 @@ impl Reference {
             None => (Tilt { volume: 0.0, shift: Vector::ZERO }, FROZEN_TILT),
         };
         let tilt = weight * turned.length() * self.reach;
-        if !(approach.abs() + tilt <= fraction * self.indentation
-            && across + chord * self.lever <= fraction * self.cell)
+        // How far the contact travelled over the surfaces. A ball looks the same from every
+        // side, so its own turning does not count: under a ball A the contact travels over B as
+        // the moved contact point does, and between two balls the overlap is a lens of the
+        // centres' distance alone, which the approach follows.
+        let travel = match (ball_a, shapes.1.sphere_radius().is_some()) {
+            (true, true) => 0.0,
+            (true, false) => self.in_plane(contact_point - self.contact_point).length(),
+            _ => across + chord * self.lever,
+        };
+        if !(approach.abs() + tilt <= fraction * self.indentation && travel <= fraction * self.cell)
         {
             return None;
         }

