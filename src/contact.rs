@@ -8,9 +8,10 @@
 //! while the pair's relative motion since then stays small against the indentation and the
 //! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead: the
 //! indentation by the approach (how far A's material at the contact point moved along the
-//! normal; a ball's centre, whose turning moves no surface), the volume along the overlap's own power law `V ∝ d^p` (a flat punch's `p = 1`, a
-//! cap's or an edge's 2, a corner's 3: the secant of the last two full evaluations, or at
-//! first the shape measure the stiffness uses), the contact point as between two balls about
+//! normal; a ball's centre, whose turning moves no surface), the volume along the overlap's
+//! own power law `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the
+//! secant of the last two full evaluations, or at first the shape measure the stiffness
+//! uses), the contact point as between two balls about
 //! the bodies' centres (a body flat at the contact — a face under a ball or a cylinder's side —
 //! as a half-space: the point goes with the curved body) and across the contact plane as a tilt
 //! of the surfaces moves the overlap's centroid (by the overlap's footprint,
@@ -141,8 +142,8 @@ impl Reference {
         // A rotation by θ moves a point at distance r by its chord 2 r sin(θ/2) = 2 r |q_xyz|.
         let chord = 2.0 * Vector::new(q.x, q.y, q.z).length();
         // A's material at the contact point: its move across the contact plane and along the
-        // normal into B (the approach).
-        // A ball's surface moves with its centre alone: its own turning moves no surface.
+        // normal into B (the approach). A ball's surface moves with its centre alone: its own
+        // turning moves no surface.
         let ball_a = shapes.0.sphere_radius().is_some();
         let shift = if ball_a { self.centre_a(&motion).1 } else { self.material_shift(&motion) };
         let (across, approach) = (self.in_plane(shift).length(), -shift.dot(self.normal));

@@ -1265,7 +1265,7 @@ fn a_ball_rolling_on_a_face_is_updated_as_on_a_half_space() {
         "full evaluations {full_cube}, on a half-space {full_plane}"
     );
     // The full evaluations themselves scatter by up to ~2.5 % at N_c = 4 as the cap moves
-    // across the grid (the grid of the cube pair lies in the turning ball's frame).
+    // across the grid.
     for worst in [worst_plane, worst_cube] {
         assert!(worst <= 0.03, "force off by {worst:.3e}");
     }

@@ -9,7 +9,6 @@ use super::{box_sphere, CustomSdf, PolyhedronSdf, Sdf};
 use crate::error::{check_finite_vec, check_positive, Error, Result};
 use crate::math::{Real, Vector};
 
-/// Exact 2D signed distance to a convex polygon given counter-clockwise, with its gradient.
 /// The distance of `p` from the y axis and the unit vector away from it (`x` on the axis): a
 /// round body's meridian coordinate `r` and the direction it grows in.
 fn radial(p: Vector) -> (Real, Vector) {
@@ -17,6 +16,7 @@ fn radial(p: Vector) -> (Real, Vector) {
     (r, if r > 0.0 { Vector::new(p.x / r, 0.0, p.z / r) } else { Vector::X })
 }
 
+/// Exact 2D signed distance to a convex polygon given counter-clockwise, with its gradient.
 fn polygon_sdf_2d(p: [Real; 2], poly: &[[Real; 2]]) -> (Real, [Real; 2]) {
     let n = poly.len();
     let mut inside_max = Real::NEG_INFINITY;
