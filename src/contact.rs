@@ -11,7 +11,9 @@
 //! normal; a ball's centre, whose turning moves no surface), the volume along the overlap's
 //! own power law `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the
 //! secant of the last two full evaluations, or at first the shape measure the stiffness
-//! uses), the contact point as between two balls about
+//! uses) — or, for a ball against a ball, a half-space or a face (a lens or a cap), along the
+//! lens's exact law, the full evaluation scaled by the exact lens's volume and surface at the
+//! ball's depth then and now — the contact point as between two balls about
 //! the bodies' centres (a body flat at the contact — a face under a ball or a cylinder's side —
 //! as a half-space: the point goes with the curved body) and across the contact plane as a tilt
 //! of the surfaces moves the overlap's centroid (by the overlap's footprint,
@@ -26,7 +28,7 @@ use crate::error::Result;
 use crate::force::{contact_force_with_history, BodyKinematics, ContactForce};
 use crate::material::PairParameters;
 use crate::math::{Pose, Real, Rotation, Vector};
-use crate::overlap::{compute_overlap, Footprint, OverlapGeometry, OverlapSettings};
+use crate::overlap::{compute_overlap, lens_measures, Footprint, OverlapGeometry, OverlapSettings};
 use crate::shape::Sdf;
 use crate::tangential::TangentialHistory;
 
@@ -100,6 +102,11 @@ pub struct Reference {
     /// unbounded body (a half-space) and for a body flat at the contact point (a face) against
     /// one that is not.
     pub radii: [Real; 2],
+    /// A ball against a ball or against a body flat at the contact: their overlap is a lens,
+    /// or a cap, of the ball's depth alone, and an update follows its exact law. `None` for
+    /// other pairs.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    pub lens: Option<Lens>,
     /// Volume (m³).
     pub volume: Real,
     /// Indentation (m).
@@ -123,6 +130,37 @@ pub struct Reference {
     /// evaluation gave one: how an update moves the centroid when the surfaces tilt.
     #[cfg_attr(feature = "checkpoint", serde(default))]
     pub footprint: Option<Footprint>,
+}
+
+/// A ball's overlap with a ball or a flat body (a lens or a cap), as [`Reference`] keeps it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+pub struct Lens {
+    /// The bodies' radii (m, their enlargement included), A's then B's; infinite for a flat
+    /// body. At least one is finite: the ball whose depth is measured.
+    pub radii: [Real; 2],
+    /// The enlargements (m), A's then B's.
+    pub enlargement: [Real; 2],
+}
+
+impl Lens {
+    /// How deep the ball (A's if A is one, else B's) reaches into the other body, A at
+    /// `relative` in B's frame, `centres` the bodies' centres in their own frames: its radius
+    /// less the other's enlarged distance at its centre — for two balls the radii's sum less
+    /// the centres' distance, for a ball on a face the cap's height.
+    fn depth<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        (a, b): (&A, &B),
+        relative: &Pose,
+        centres: [Vector; 2],
+    ) -> Real {
+        let [eps_a, eps_b] = self.enlargement;
+        if self.radii[0].is_finite() {
+            self.radii[0] + eps_b - b.distance(relative.transform_point(centres[0]))
+        } else {
+            self.radii[1] + eps_a - a.distance(relative.inverse_transform_point(centres[1]))
+        }
+    }
 }
 
 impl Reference {
@@ -167,18 +205,15 @@ impl Reference {
             (true, false) => self.in_plane(contact_point - self.contact_point).length(),
             _ => across + chord * self.lever,
         };
-        if !(approach.abs() + tilt <= fraction * self.indentation && travel <= fraction * self.cell)
+        // A lens follows its exact law, so only the grid's own error, which hardly changes with
+        // the lens's size, is left for the allowance on its approach.
+        let allowance = if self.lens.is_some() { LENS_ALLOWANCE } else { 1.0 };
+        if !(approach.abs() + tilt <= allowance * fraction * self.indentation
+            && travel <= fraction * self.cell)
         {
             return None;
         }
-        // The overlap grows as if similar about its deepest point: its depth `D = d / rate`
-        // follows the approach one to one, `d` and `V` in proportion to `D` and `D^p`.
-        let ratio = 1.0 + approach * self.depth_rate / self.indentation;
-        // Parting (possible only with allowances above 1) is left to a full evaluation.
-        if !(ratio > 0.0) {
-            return None;
-        }
-        let p = self.exponent;
+        let (volume, indentation, surface_area) = self.grown(shapes, relative, approach)?;
         // The normal turns as the surfaces' own normal there does.
         let (before, now) = (
             (self.gradients[1] - self.gradients[0]).normalize_or_zero(),
@@ -188,7 +223,7 @@ impl Reference {
             return None;
         }
         let normal = Rotation::from_rotation_arc(before, now) * self.normal;
-        let volume = self.volume * ratio.powf(p) + tilted.volume;
+        let volume = volume + tilted.volume;
         if !(volume > 0.0) {
             return None;
         }
@@ -197,11 +232,52 @@ impl Reference {
             volume,
             contact_point: pose_b.transform_point(contact_point),
             normal: pose_b.rotation * normal,
-            indentation: self.indentation * ratio,
-            surface_area: self.surface_area * ratio.powf(p - 1.0),
+            indentation,
+            surface_area,
             corrected_box,
             footprint: self.footprint.map(|f| f.transformed(pose_b)),
         })
+    }
+
+    /// Volume, indentation and surface area after an `approach` at the contact point (A now at
+    /// `relative`), or `None` when the bodies part (possible only with allowances above 1; left
+    /// to a full evaluation).
+    ///
+    /// A lens (or a cap) scales the full evaluation's values by its exact law, from the ball's
+    /// depth then and now: what the grid gives differs from the exact lens only by its
+    /// discretisation error, which the scaling carries along. Other overlaps grow as if similar
+    /// about their deepest point: the depth `D = d / rate` follows the approach one to one, `d`
+    /// and `V` in proportion to `D` and `D^p`.
+    fn grown<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        shapes: (&A, &B),
+        relative: &Pose,
+        approach: Real,
+    ) -> Option<(Real, Real, Real)> {
+        if let Some(lens) = self.lens {
+            let then = lens.depth(shapes, &self.relative, self.centres);
+            let now = lens.depth(shapes, relative, self.centres);
+            if !(now > 0.0 && then > 0.0) {
+                return None;
+            }
+            let ((v0, a0), (v1, a1)) =
+                (lens_measures(lens.radii, then), lens_measures(lens.radii, now));
+            return Some((
+                self.volume * (v1 / v0),
+                self.indentation + (now - then),
+                self.surface_area * (a1 / a0),
+            ));
+        }
+        let ratio = 1.0 + approach * self.depth_rate / self.indentation;
+        if !(ratio > 0.0) {
+            return None;
+        }
+        let p = self.exponent;
+        Some((
+            self.volume * ratio.powf(p),
+            self.indentation * ratio,
+            self.surface_area * ratio.powf(p - 1.0),
+        ))
     }
 
     /// The first-order effect of a tilt on an overlap between two nearly parallel surfaces
@@ -331,6 +407,11 @@ fn flat_at<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     flat
 }
 
+/// How many times the approach allowance a lens's update may go ([`Reference::grown`]): it
+/// follows the lens's exact law, so its error is the grid's discretisation error at the last
+/// full evaluation carried to another depth.
+const LENS_ALLOWANCE: Real = 16.0;
+
 /// Change of a unit gradient below which two points lie on one flat face (round-off of the
 /// frame transform).
 const FLAT: Real = 1e-9;
@@ -445,7 +526,8 @@ impl ContactModel {
     ///   contact point (A's material there, along the normal) plus twice the tilt across the
     ///   overlap (how far the surfaces' normals at the contact point turned, times the
     ///   corrected box's diagonal; eight times where the surfaces meet at an angle: an update
-    ///   follows a tilt only between nearly parallel surfaces, and only to first order), and
+    ///   follows a tilt only between nearly parallel surfaces, and only to first order); a
+    ///   lens or a cap, which an update follows by its exact law, by sixteen times that, and
     /// - A's material point at the contact travels across the grid by at most
     ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
     ///   the roll's chord at the nearer body's bounding-sphere centre.
@@ -596,7 +678,18 @@ impl ContactModel {
             _ => {}
         }
         let centres = [sphere_a.0, sphere_b.0];
+        // A ball against a ball or a flat body: a lens, or a cap, of the ball's depth alone.
+        let enlargement = self.settings.enlargement();
+        let [eps_a, eps_b] = enlargement;
+        let radii = match (a.shape.sphere_radius(), b.shape.sphere_radius()) {
+            (Some(ra), Some(rb)) => Some([ra + eps_a, rb + eps_b]),
+            (Some(ra), None) if !r_b.is_finite() => Some([ra + eps_a, Real::INFINITY]),
+            (None, Some(rb)) if !r_a.is_finite() => Some([Real::INFINITY, rb + eps_b]),
+            _ => None,
+        };
+        let lens = radii.map(|radii| Lens { radii, enlargement });
         Reference {
+            lens,
             relative,
             contact_point,
             normal,

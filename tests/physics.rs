@@ -1295,3 +1295,62 @@ fn a_ball_spinning_against_another_is_updated_without_full_evaluations() {
     }
     assert_eq!(full, 1, "only the first touch is evaluated in full");
 }
+
+/// A ball pressed into a ball, or into a half-space, overlaps in a lens (a cap) of its depth
+/// alone, and an update scales the last full evaluation by the lens's exact law: between full
+/// evaluations the volume stays the same multiple of the exact lens's (to round-off), the
+/// approach allowance is sixteen times the other shapes' (at the default, the indentation may
+/// grow fivefold before a full evaluation), and every update stays within the full
+/// evaluations' own scatter of them (N_c = 4). Both bodies carry a contact enlargement, which
+/// the lens includes.
+#[test]
+fn a_lens_is_updated_by_its_exact_law() {
+    let m = Material::new(1e8, 0.3).unwrap();
+    let eps = 2e-4;
+    let settings = settings(4, IntegrationMode::Subcell).with_enlargement(eps, eps).unwrap();
+    let model =
+        |s: OverlapSettings| ContactModel::new(PairParameters::new(&m, &m, 0.8).unwrap(), s);
+    let full = model(settings);
+    let reused = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
+    let exact = model(settings.with_closed_form_spheres(true));
+    let (ra, rb) = (0.01, 0.015);
+    let (ball_a, ball_b) = (ConvexShape::ball(ra).unwrap(), ConvexShape::ball(rb).unwrap());
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    // Along a line of the centres that no grid axis follows.
+    let line = Vector::new(0.3, 1.0, 0.2).normalize();
+    let cases: [(&str, &ConvexShape, Vector, Vector); 2] = [
+        ("lens", &ball_b, line * (ra + rb + 2.0 * eps), line),
+        ("cap", &floor, Vector::Y * (ra + 2.0 * eps), Vector::Y),
+    ];
+    for (name, other, touching, towards_a) in cases {
+        let b = BodyState::at_rest(other, Pose::IDENTITY);
+        let (mut state, mut full_state, mut exact_state) = (None, None, None);
+        let (mut fulls, mut ratio, mut worst) = (0, 0.0, 0.0f64);
+        // From 20 µm to 100 µm deep in 1 µm steps.
+        for k in 20..=100 {
+            let at = Pose::from_translation(touching - towards_a * (k as f64 * 1e-6));
+            let a = BodyState::at_rest(&ball_a, at);
+            let out = reused.evaluate(&a, &b, &mut state).unwrap().unwrap();
+            let reference = full.evaluate(&a, &b, &mut full_state).unwrap().unwrap();
+            let lens = exact.evaluate(&a, &b, &mut exact_state).unwrap().unwrap();
+            let now = out.geometry.volume / lens.geometry.volume;
+            if out.full {
+                fulls += 1;
+            } else {
+                assert!(
+                    (now / ratio - 1.0).abs() < 1e-9,
+                    "{name}, {k} µm: the update left the lens's law by {:.2e}",
+                    now / ratio - 1.0
+                );
+            }
+            ratio = now;
+            let off = (out.force.normal_force / reference.force.normal_force - 1.0).abs();
+            worst = worst.max(off);
+        }
+        println!(
+            "{name}: {fulls} full evaluations of 81, force off the full evaluations by {worst:.2e}"
+        );
+        assert!(fulls <= 2, "{name}: {fulls} full evaluations");
+        assert!(worst <= 0.03, "{name}: force off by {worst:.3e}");
+    }
+}

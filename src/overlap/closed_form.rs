@@ -27,6 +27,35 @@ fn cap_centroid(h: Real, r: Real) -> Real {
     3.0 * (2.0 * r - h).powi(2) / (4.0 * (3.0 * r - h))
 }
 
+/// Heights of the caps of two spheres of radii `a` and `b` whose centres are `d` apart (A's
+/// towards B, B's towards A), free of cancellation.
+fn cap_heights(a: Real, b: Real, d: Real) -> (Real, Real) {
+    let s = a + b - d;
+    (s * (b - a + d) / (2.0 * d), s * (a - b + d) / (2.0 * d))
+}
+
+/// Volume and surface area of a sphere of radius `r`'s cap of height `h` on a plane (its curved
+/// surface and the flat disc).
+fn plane_cap(r: Real, h: Real) -> (Real, Real) {
+    (cap_volume(h, r), 2.0 * PI * r * h + PI * h * (2.0 * r - h))
+}
+
+/// Volume and surface area of the overlap of two spheres of `radii` that overlap by `s` along
+/// the line of their centres; an infinite radius is a plane (a cap). What geometry reuse
+/// scales a grid evaluation of such a pair by.
+pub(crate) fn lens_measures(radii: [Real; 2], s: Real) -> (Real, Real) {
+    match radii.map(Real::is_finite) {
+        [true, true] => {
+            let [a, b] = radii;
+            let (ha, hb) = cap_heights(a, b, a + b - s);
+            (cap_volume(ha, a) + cap_volume(hb, b), 2.0 * PI * (a * ha + b * hb))
+        }
+        [true, false] => plane_cap(radii[0], s),
+        [false, true] => plane_cap(radii[1], s),
+        [false, false] => (Real::NAN, Real::NAN),
+    }
+}
+
 /// The overlap of `a` and `b` (dilated by `eps`) when both are spheres, or one a sphere and the
 /// other a half-space: [`Exact::Overlap`] when they overlap partly, [`Exact::Apart`] when they
 /// are apart, [`Exact::Uncovered`] when the pair is of another kind or the configuration is one
@@ -82,9 +111,8 @@ fn lens(ca: Vector, a: Real, cb: Vector, b: Real, pose_b: &Pose) -> Exact {
         return Exact::Uncovered;
     }
     let n = (ca - cb) / d;
-    // Heights of A's cap (towards B) and B's cap (towards A), free of cancellation.
     let s = a + b - d;
-    let (ha, hb) = (s * (b - a + d) / (2.0 * d), s * (a - b + d) / (2.0 * d));
+    let (ha, hb) = cap_heights(a, b, d);
     let (va, vb) = (cap_volume(ha, a), cap_volume(hb, b));
     let volume = va + vb;
     let contact_point =
@@ -119,14 +147,14 @@ fn cap_on_plane(
     if h >= 2.0 * r || h.is_nan() {
         return Exact::Uncovered;
     }
-    let volume = cap_volume(h, r);
+    let (volume, surface_area) = plane_cap(r, h);
     let contact_point = c - m * cap_centroid(h, r);
     let geometry = OverlapGeometry {
         volume,
         contact_point,
         normal,
         indentation: h,
-        surface_area: 2.0 * PI * r * h + PI * h * (2.0 * r - h),
+        surface_area,
         corrected_box: sphere_box(contact_point, r, pose_b),
         footprint: None,
     };

@@ -37,6 +37,7 @@ mod count;
 mod crease;
 mod footprint;
 mod polyhedra;
+pub(crate) use closed_form::lens_measures;
 pub use footprint::Footprint;
 mod subcell;
 
