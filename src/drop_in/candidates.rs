@@ -92,28 +92,31 @@ impl DiscreteContacts {
         }
     }
 
-    /// Rapier's broad-phase pairs of two handled colliders.
-    pub(super) fn rapier_pairs<'w>(
-        &'w self,
-        world: &'w PhysicsWorld,
-    ) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
-        world
-            .narrow_phase
-            .contact_pairs()
-            .map(|p| (p.collider1, p.collider2))
-            .filter(|(a, b)| self.handled.contains_key(a) && self.handled.contains_key(b))
+    /// The handled unbounded colliders (half-spaces), in handle order.
+    fn half_spaces(&self) -> Vec<ColliderHandle> {
+        let mut planes: Vec<ColliderHandle> =
+            self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
+        planes.sort_by_key(|c| c.into_raw_parts());
+        planes
     }
 
     /// Rapier's pairs of two handled colliders of which one is unbounded (a half-space): the
-    /// bounded pairs come from the neighbour list.
+    /// bounded pairs come from the neighbour list. Read from each half-space's own pairs, not
+    /// from all of rapier's (thousands where its length unit is far above the bodies' size).
     pub(super) fn rapier_half_space_pairs<'w>(
         &'w self,
         world: &'w PhysicsWorld,
         hooks: &'w dyn PhysicsHooks,
     ) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
-        let unbounded = |c: &ColliderHandle| !self.handled[c].radius.is_finite();
-        self.rapier_pairs(world).filter(move |&(a, b)| {
-            (unbounded(&a) || unbounded(&b)) && self.interact(world, hooks, a, b)
+        let key = |c: &ColliderHandle| c.into_raw_parts();
+        self.half_spaces().into_iter().flat_map(move |p| {
+            world.narrow_phase.contact_pairs_with(p).filter_map(move |pair| {
+                let (a, b) = (pair.collider1, pair.collider2);
+                let other = if a == p { b } else { a };
+                // A pair of two half-spaces once, from the first of them.
+                let once = self.handled.get(&other)?.radius.is_finite() || key(&p) < key(&other);
+                (once && self.interact(world, hooks, a, b)).then_some((a, b))
+            })
         })
     }
 
@@ -203,10 +206,7 @@ impl DiscreteContacts {
         > = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
         pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)));
         // Half-spaces against bounded bodies: few half-spaces, so a plain loop.
-        let mut planes: Vec<ColliderHandle> =
-            self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
-        planes.sort_by_key(|c| c.into_raw_parts());
-        for &p in &planes {
+        for p in self.half_spaces() {
             let ColliderMotion { pose, kinematics: kp, .. } = Self::kinematics(world, p);
             let ConvexShape::HalfSpace { normal } = self.handled[&p].shape else { continue };
             let (n, on_plane) = (pose.rotation * normal, pose.translation);
