@@ -141,6 +141,9 @@ pub struct Lens {
     pub radii: [Real; 2],
     /// The enlargements (m), A's then B's.
     pub enlargement: [Real; 2],
+    /// The ball's depth at the full evaluation (m): its radius less the other body's enlarged
+    /// distance at its centre.
+    pub depth: Real,
 }
 
 impl Lens {
@@ -148,7 +151,7 @@ impl Lens {
     /// `relative` in B's frame, `centres` the bodies' centres in their own frames: its radius
     /// less the other's enlarged distance at its centre — for two balls the radii's sum less
     /// the centres' distance, for a ball on a face the cap's height.
-    fn depth<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    fn depth_at<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         (a, b): (&A, &B),
         relative: &Pose,
@@ -255,8 +258,7 @@ impl Reference {
         approach: Real,
     ) -> Option<(Real, Real, Real)> {
         if let Some(lens) = self.lens {
-            let then = lens.depth(shapes, &self.relative, self.centres);
-            let now = lens.depth(shapes, relative, self.centres);
+            let (then, now) = (lens.depth, lens.depth_at(shapes, relative, self.centres));
             if !(now > 0.0 && then > 0.0) {
                 return None;
             }
@@ -687,7 +689,11 @@ impl ContactModel {
             (None, Some(rb)) if !r_a.is_finite() => Some([Real::INFINITY, rb + eps_b]),
             _ => None,
         };
-        let lens = radii.map(|radii| Lens { radii, enlargement });
+        let lens = radii.map(|radii| {
+            let mut lens = Lens { radii, enlargement, depth: 0.0 };
+            lens.depth = lens.depth_at((a.shape, b.shape), &relative, centres);
+            lens
+        });
         Reference {
             lens,
             relative,
