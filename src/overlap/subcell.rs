@@ -696,12 +696,15 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     cutter.cell(&corners, h, [in_a, in_b]);
                 }
                 // The footprint cell by cell: the cell's facets at the centroid of its part of
-                // the overlap.
+                // the overlap, or at its centre where it holds a facet alone (a body's face on
+                // a node layer goes to the cell on the body's side, which may hold no volume).
                 let it = &mut cutter.sums;
                 let part = it.volume - volume;
                 let facets = 0.5 * (it.area[0] + it.area[1] - area);
-                if part > 0.0 && facets > 0.0 {
-                    it.footprint.add((it.moment - moment) / part, h, facets);
+                if facets > 0.0 {
+                    let at =
+                        if part > 0.0 { (it.moment - moment) / part } else { origin + h * 0.5 };
+                    it.footprint.add(at, h, facets);
                 }
             }
         }
@@ -749,9 +752,11 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     ///
     /// A bent cell is told by the distance at its centre: for a flat surface it is the mean of
     /// the corners' (the SDF is linear there), on a smooth one within `h²/R` of it, and an edge
-    /// or corner in the cell puts it a fraction of the cell's size below. The rule reads both
-    /// bodies alike (A↔B symmetry) and distances only (rigid-motion invariance). A body whose corners all lie outside and whose centre lies
-    /// farther than half the diagonal does not reach into the cell (the SDF is 1-Lipschitz).
+    /// or corner in the cell puts it a fraction of the cell's size below; a flat face's rim on
+    /// one of the cell's faces is told apart ([`rim_on_face`](Self::rim_on_face)). The rules
+    /// read both bodies alike (A↔B symmetry) and distances only (rigid-motion invariance). A
+    /// body whose corners all lie outside and whose centre lies farther than half the diagonal
+    /// does not reach into the cell (the SDF is 1-Lipschitz).
     fn cell(&mut self, c: &[Vert; 8], h: Vector, [in_a, in_b]: [u8; 2]) {
         let centre = c[0].x + h * 0.5;
         let diagonal = h.length();
@@ -765,7 +770,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
         let bent = |s: usize, d: Real| {
             let mean = c.iter().map(|v| v.d[s]).sum::<Real>() / 8.0;
-            tested[s] && (mean - d).abs() > BENT * diagonal
+            tested[s] && ((mean - d).abs() > BENT * diagonal || self.rim_on_face(s, c))
         };
         let bends = [bent(0, ca), bent(1, cb)];
         // A body with no corner inside reaches in only with an edge or a corner: bent.
@@ -831,6 +836,33 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         for tet in TETS {
             self.tet(&tet.map(|i| c[i]));
         }
+    }
+
+    /// Whether the rim of one of body `s`'s flat faces ([`Sdf::flat_faces`]) passes through
+    /// cell `c`: the face's plane reaches the cell, and of the cell's corners some take their
+    /// distance from the face (the distance is the plane's) and some from the rest of the body
+    /// (it is greater). The distance test of [`cell`](Self::cell) misses a rim where the face
+    /// lies near a node layer: the face's distance there is near zero at the corners on the
+    /// layer, so hardly a kink shows at the cell's centre against the cell's diagonal, and
+    /// crossings along the edges in the layer miss the rim. On a thin overlap's flat cells (a
+    /// cylinder lying on a floor, whose caps the persistent grid puts on its end layers) such
+    /// cells were interpolated across the rim and lost a fifth of their volume.
+    fn rim_on_face(&self, s: usize, c: &[Vert; 8]) -> bool {
+        let Some(flats) = &self.flats[s] else { return false };
+        let (lo, hi) = (c[0].x, c[7].x);
+        let (mid, tol) = ((lo + hi) * 0.5, crease::tolerance(lo, hi));
+        flats.iter().any(|(p, spread)| {
+            if (p.n.dot(mid) - p.h).abs() > spread + tol {
+                return false;
+            }
+            let (mut on, mut beyond) = (false, false);
+            for v in c {
+                let plane = p.n.dot(v.x) - p.h;
+                on |= (v.d[s] - plane).abs() <= tol;
+                beyond |= v.d[s] > plane + tol;
+            }
+            on && beyond
+        })
     }
 
     /// The overlap in a cell `c` that only polyhedral surfaces may pass through: the cell
