@@ -442,6 +442,79 @@ fn through_ball_centres<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     g
 }
 
+/// The geometry with no moment of the normal force about the axis of a body of revolution
+/// ([`Sdf::revolution_axis`]): every normal of such a body lies in a plane through its axis
+/// (a cylinder's side and a capsule's pass through it, a cap's runs along it), so the pressure
+/// on it has no moment about the axis. The grid's contact point lies off that plane by its
+/// discretisation error, always to the same side of the grid's cells, and the moment rolled a
+/// cylinder lying on a floor away, ever faster. The contact point moves across the normal, by
+/// the least distance that puts it in the plane of the axis and the normal (in both planes,
+/// for two such bodies; on their mean where the two are nearly parallel and disagree) where
+/// the normal crosses the axis, and by less, as `sin²` of their angle, as the normal turns
+/// along the axis: the pressure on a cap runs along the axis and has no moment about it
+/// wherever it acts, and only the blended normal's small tilt from the axis would give the
+/// point's offset one — while that offset, across a face rocking on a face, is what rights
+/// it. Balls are left to
+/// [`through_ball_centres`]: a ball's line through its centre along the other body's gradient
+/// lies in that body's plane too.
+fn about_no_axis<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    mut g: OverlapGeometry,
+    a: &BodyState<'_, A>,
+    b: &BodyState<'_, B>,
+) -> OverlapGeometry {
+    if a.shape.sphere_radius().is_some() || b.shape.sphere_radius().is_some() {
+        return g;
+    }
+    let n = g.normal;
+    // Per body with an axis not along the normal: the unit normal of the plane of its axis
+    // and the contact normal, and how far the contact point is to move towards that plane —
+    // all the way where the normal crosses the axis (a side), less as it turns along it
+    // (`sin²` of their angle): on a cap the pressure runs along the axis, whatever the
+    // blended normal's tilt, and a point off the plane has a moment only by that tilt.
+    let plane = |axis: Option<(Vector, Vector)>, pose: &Pose| {
+        let (point, direction) = axis?;
+        let m = n.cross(pose.rotation * direction);
+        let length = m.length();
+        (length > AXIS_ALONG_NORMAL).then(|| {
+            let off = (g.contact_point - pose.transform_point(point)).dot(m / length);
+            (m / length, off * length * length)
+        })
+    };
+    let shift = match (
+        plane(a.shape.revolution_axis(), &a.pose),
+        plane(b.shape.revolution_axis(), &b.pose),
+    ) {
+        (None, None) => return g,
+        (Some((m, off)), None) | (None, Some((m, off))) => -m * off,
+        (Some((m1, off1)), Some((m2, off2))) => {
+            // The least shift in the span of m1 and m2 that zeroes both offsets.
+            let (m2, off2) = if m1.dot(m2) < 0.0 { (-m2, -off2) } else { (m2, off2) };
+            let c = m1.dot(m2);
+            let det = 1.0 - c * c;
+            if det < PARALLEL_AXES {
+                -(m1 + m2).normalize_or_zero() * (0.5 * (off1 + off2))
+            } else {
+                let alpha = (-off1 + c * off2) / det;
+                let beta = (-off2 + c * off1) / det;
+                m1 * alpha + m2 * beta
+            }
+        }
+    };
+    if shift.is_finite() {
+        g.contact_point += shift;
+    }
+    g
+}
+
+/// `|n × a|` below which a body's axis `a` counts as along the contact normal `n`
+/// ([`about_no_axis`]): the normal force's moment about it is then nil (or the plane of the
+/// two ill-defined), and the contact point stays.
+const AXIS_ALONG_NORMAL: Real = 1e-6;
+
+/// `1 − cos²` of the angle between two bodies' planes ([`about_no_axis`]) below which they
+/// count as parallel: the contact point moves onto their mean.
+const PARALLEL_AXES: Real = 1e-6;
+
 /// How many times the approach allowance a lens's update may go ([`Reference::grown`]): it
 /// follows the lens's exact law, so its error is the grid's discretisation error at the last
 /// full evaluation carried to another depth.
@@ -583,6 +656,11 @@ impl ContactModel {
     /// (damping from the current approach speed); bodies apart → `state` is cleared and
     /// `Ok(None)` returned. A live contact keeps its damping unless it approaches faster than
     /// it did when `c` was set; then `c` is set anew from that speed.
+    ///
+    /// The normal force of a ball passes through its centre, and that of a body of revolution
+    /// ([`Sdf::revolution_axis`]) has no moment about its axis, as the pressure on such a body
+    /// has none: the contact point is moved across the normal where the grid's lies off by its
+    /// discretisation error (see `through_ball_centres` and `about_no_axis`).
     pub fn evaluate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         a: &BodyState<'_, A>,
@@ -621,7 +699,7 @@ impl ContactModel {
                 g
             }
         };
-        let geometry = through_ball_centres(geometry, a, b);
+        let geometry = about_no_axis(through_ball_centres(geometry, a, b), a, b);
         let x = geometry.contact_point;
         let approach =
             -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);

@@ -427,6 +427,18 @@ impl Sdf for ConvexShape {
         }
     }
 
+    fn revolution_axis(&self) -> Option<(Vector, Vector)> {
+        match self {
+            Self::Cylinder { .. } | Self::Cone { .. } => Some((Vector::ZERO, Vector::Y)),
+            Self::Capsule { a, b, .. } => {
+                let d = (*b - *a).normalize_or_zero();
+                (d != Vector::ZERO).then_some((*a, d))
+            }
+            Self::Rounded { inner, .. } => inner.revolution_axis(),
+            _ => None,
+        }
+    }
+
     fn bounding_sphere(&self) -> (Vector, Real) {
         match self {
             Self::Ball { radius } => (Vector::ZERO, *radius),

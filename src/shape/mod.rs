@@ -105,6 +105,16 @@ pub trait Sdf: Send + Sync {
         None
     }
 
+    /// The axis `(point, unit direction)` (body frame) when the body is a body of revolution
+    /// about it — a cylinder, a cone, a capsule, such a body rounded: every normal of its
+    /// surface lies in a plane through the axis, so no pressure on the body has a moment about
+    /// it, and the contact keeps its normal force so (see
+    /// [`ContactModel::evaluate`](crate::ContactModel::evaluate)). `None` (the default)
+    /// otherwise; a ball says [`sphere_radius`](Self::sphere_radius) instead.
+    fn revolution_axis(&self) -> Option<(Vector, Vector)> {
+        None
+    }
+
     /// The planes `(n, h)` of the flat faces (`n·p <= h` inside), when the body is a smooth
     /// convex body — its [`smooth_part`](Self::smooth_part) — cut by finitely many half-spaces
     /// whose faces meet the smooth surface in edges: a cylinder's two caps. Also the flat parts
