@@ -1355,6 +1355,15 @@ fn a_lens_is_updated_by_its_exact_law() {
     }
 }
 
+/// The bin scene's rubber (E = 5 MPa, ν = 0.4, e = 0.5) on the sub-cell grid at `N_c` = 4.
+fn rubber_contact() -> ContactModel {
+    let m = Material::new(5e6, 0.4).unwrap();
+    ContactModel::new(
+        PairParameters::new(&m, &m, 0.5).unwrap(),
+        settings(4, IntegrationMode::Subcell),
+    )
+}
+
 /// A cylinder standing on a floor: its footprint is the whole cap at every evaluation, also
 /// where the persistent grid puts the cap and the floor on node layers (each face's facet
 /// then goes to a cell that holds no volume), and an update follows a rocking tilt with the
@@ -1363,11 +1372,7 @@ fn a_lens_is_updated_by_its_exact_law() {
 /// cylinder into rocking again.
 #[test]
 fn a_flat_face_on_a_floor_keeps_its_whole_footprint() {
-    let m = Material::new(5e6, 0.4).unwrap();
-    let model = ContactModel::new(
-        PairParameters::new(&m, &m, 0.5).unwrap(),
-        settings(4, IntegrationMode::Subcell),
-    );
+    let model = rubber_contact();
     let reused = model.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
     let (r, depth) = (0.01, 2.6e-6);
     let cylinder = ConvexShape::cylinder(r, r).unwrap();
@@ -1407,11 +1412,7 @@ fn a_flat_face_on_a_floor_keeps_its_whole_footprint() {
 /// across, and the strip came out 7 % short, its contact point 0.44 mm towards one cap).
 #[test]
 fn a_cylinder_lying_on_a_floor_keeps_its_strip_whole() {
-    let m = Material::new(5e6, 0.4).unwrap();
-    let model = ContactModel::new(
-        PairParameters::new(&m, &m, 0.5).unwrap(),
-        settings(4, IntegrationMode::Subcell),
-    );
+    let model = rubber_contact();
     let (r, half) = (0.01, 0.01);
     let cylinder = ConvexShape::cylinder(half, r).unwrap();
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
@@ -1447,11 +1448,7 @@ fn a_cylinder_lying_on_a_floor_keeps_its_strip_whole() {
 /// error, and that moment once rolled a cylinder lying on a floor away.
 #[test]
 fn a_side_pressed_into_a_face_has_no_moment_about_its_axis() {
-    let m = Material::new(5e6, 0.4).unwrap();
-    let model = ContactModel::new(
-        PairParameters::new(&m, &m, 0.5).unwrap(),
-        settings(4, IntegrationMode::Subcell),
-    );
+    let model = rubber_contact();
     let r = 0.01;
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let cube = ConvexShape::cuboid(Vector::splat(0.05)).unwrap();
