@@ -411,9 +411,11 @@ fn flat_at<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 
 /// The geometry with a ball's normal force along the ball's own normal and through its
 /// centre. Every normal of a sphere passes through its centre, so no pressure on it has a
-/// torque about it; and the overlap of a ball with a face, a ball, an edge or a corner is
-/// symmetric about the line from the other body's nearest point to the ball's centre, which is
-/// the other body's distance gradient there (between two balls, the line of their centres).
+/// torque about it; and the overlap of a ball with a face or another ball is symmetric about
+/// the line from the other body's nearest point to the ball's centre, which is the other
+/// body's distance gradient there (between two balls, the line of their centres) — with an
+/// edge, about the plane through that line normal to the edge; at a corner that line is the
+/// direction in which the ball's depth is measured.
 /// The grid gives both to its discretisation error only, always to the same side of its cells:
 /// a fraction of a per cent of a cell off the centre, and a normal tilted by a few millionths,
 /// enough to roll a ball resting on a floor away, faster and faster. A ball's contact takes
