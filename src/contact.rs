@@ -448,8 +448,8 @@ fn through_ball_centres<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 /// ([`Sdf::revolution_axis`]): every normal of such a body lies in a plane through its axis
 /// (a cylinder's side and a capsule's pass through it, a cap's runs along it), so the pressure
 /// on it has no moment about the axis. The grid's contact point lies off that plane by its
-/// discretisation error, always to the same side of the grid's cells, and the moment rolled a
-/// cylinder lying on a floor away, ever faster. The contact point moves across the normal, by
+/// discretisation error, always to the same side of the grid's cells, and that moment would
+/// roll a cylinder lying on a floor away, ever faster. The contact point moves across the normal, by
 /// the least distance that puts it in the plane of the axis and the normal (in both planes,
 /// for two such bodies; on their mean where the two are nearly parallel and disagree) where
 /// the normal crosses the axis, and by less, as `sin²` of their angle, as the normal turns
@@ -598,7 +598,10 @@ fn relative_pose(a: &Pose, b: &Pose) -> Pose {
 /// Geometry and force of one evaluation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContactOutput {
-    /// Overlap geometry.
+    /// Overlap geometry; its contact point is where the normal force acts, moved off the
+    /// overlap's centroid for a ball (onto the line through its centre) and for a body of
+    /// revolution (into the plane of its axis and the normal), see
+    /// [`ContactModel::evaluate`].
     pub geometry: OverlapGeometry,
     /// Force and torques.
     pub force: ContactForce,

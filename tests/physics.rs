@@ -1367,8 +1367,8 @@ fn rubber_contact() -> ContactModel {
 /// A cylinder standing on a floor: its footprint is the whole cap at every evaluation, also
 /// where the persistent grid puts the cap and the floor on node layers (each face's facet
 /// then goes to a cell that holds no volume), and an update follows a rocking tilt with the
-/// restoring torque a full evaluation gives. With half the footprint, as once, the torque
-/// between full evaluations was half the full evaluations' and each full evaluation kicked the
+/// restoring torque a full evaluation gives. With half the footprint, the torque between full
+/// evaluations would be half the full evaluations' and each full evaluation would kick the
 /// cylinder into rocking again.
 #[test]
 fn a_flat_face_on_a_floor_keeps_its_whole_footprint() {
@@ -1408,8 +1408,8 @@ fn a_flat_face_on_a_floor_keeps_its_whole_footprint() {
 
 /// A cylinder lying on a floor: the overlap is a strip along its side, symmetric about its
 /// middle, and every evaluation gives its volume and its middle — also the persistent ones,
-/// whose grid has the caps on the box's end layers (the rims there were once interpolated
-/// across, and the strip came out 7 % short, its contact point 0.44 mm towards one cap).
+/// whose grid has the caps on the box's end layers (interpolated across the rims there, the
+/// strip comes out 7 % short, its contact point 0.44 mm towards one cap).
 #[test]
 fn a_cylinder_lying_on_a_floor_keeps_its_strip_whole() {
     let model = rubber_contact();
@@ -1445,7 +1445,7 @@ fn a_cylinder_lying_on_a_floor_keeps_its_strip_whole() {
 /// and turns about its axis: the normal force has no moment about the body's axis, as the
 /// pressure on a body of revolution has none (every normal of its side crosses the axis). The
 /// grid's contact point lies off the plane of the axis and the normal by its discretisation
-/// error, and that moment once rolled a cylinder lying on a floor away.
+/// error, and that moment would roll a cylinder lying on a floor away.
 #[test]
 fn a_side_pressed_into_a_face_has_no_moment_about_its_axis() {
     let model = rubber_contact();

@@ -305,10 +305,10 @@ fn dropped_on_a_floor(
 
 /// A ball and a standing cylinder, each released alone a millimetre above a floor, come to rest
 /// and stay there. The ball's force passes through its centre along the floor's normal (the
-/// grid's contact point, off the centre by its discretisation error, once rolled it away ever
+/// grid's contact point, off the centre by its discretisation error, would roll it away ever
 /// faster), and the cylinder's footprint keeps its whole cap (with half of it, each full
-/// evaluation kicked it into a rocking that needed a full evaluation nearly every sub-step).
-/// Alone: nothing damps a rocking about the contact point (noticed, not changed), so a landing
+/// evaluation would kick it into a rocking that needs a full evaluation nearly every sub-step).
+/// Alone: nothing damps a rocking about the contact point, so a landing
 /// that excites one — beside another body, at another sub-step — leaves it rocking.
 #[test]
 fn a_ball_and_a_cylinder_settle_on_a_floor_and_stay() {
@@ -336,7 +336,7 @@ fn a_ball_and_a_cylinder_settle_on_a_floor_and_stay() {
 }
 
 /// A cylinder lying on a floor does not roll: its normal force has no moment about its axis
-/// (the grid's contact point, off the axis's plane by its discretisation error, once rolled it
+/// (the grid's contact point, off the axis's plane by its discretisation error, would roll it
 /// away ever faster).
 #[test]
 fn a_cylinder_lying_on_a_floor_does_not_roll_away() {

@@ -846,7 +846,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     /// layer, so hardly a kink shows at the cell's centre against the cell's diagonal, and
     /// crossings along the edges in the layer miss the rim. On a thin overlap's flat cells (a
     /// cylinder lying on a floor, whose caps the persistent grid puts on its end layers) such
-    /// cells were interpolated across the rim and lost a fifth of their volume.
+    /// a cell interpolated across the rim loses a fifth of its volume.
     fn rim_on_face(&self, s: usize, c: &[Vert; 8]) -> bool {
         let Some(flats) = &self.flats[s] else { return false };
         let (lo, hi) = (c[0].x, c[7].x);
