@@ -34,6 +34,17 @@ fn test_hull() -> ConvexPolyhedron {
     .unwrap()
 }
 
+/// A box given by its corners, one corner raised by 3e-5 of the box's size: parry joins the
+/// two triangles of that bent side into one face (their normals agree to within its
+/// tolerance), so a distance taken from one face plane would be off by ~1e-5.
+fn bent_box() -> ConvexPolyhedron {
+    let mut corners: Vec<Vector> = (0..8)
+        .map(|k| Vector::new([-0.3, 0.3][k & 1], [-0.2, 0.2][(k >> 1) & 1], [-0.1, 0.1][k >> 2]))
+        .collect();
+    corners[7].z += 3e-5;
+    ConvexPolyhedron::from_convex_hull(&corners).unwrap()
+}
+
 fn parry_shapes() -> Vec<(&'static str, Box<dyn Shape>)> {
     let hull = test_hull();
     vec![
@@ -46,6 +57,7 @@ fn parry_shapes() -> Vec<(&'static str, Box<dyn Shape>)> {
             Box::new(Capsule::new(Vector::new(-0.1, -0.2, 0.0), Vector::new(0.2, 0.1, 0.05), 0.1)),
         ),
         ("polyhedron", Box::new(hull)),
+        ("bent box", Box::new(bent_box())),
     ]
 }
 

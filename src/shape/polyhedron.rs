@@ -96,38 +96,26 @@ impl PolyhedronSdf {
     }
 
     /// Builds the SDF of a parry convex polyhedron.
+    ///
+    /// The faces come from the hull's triangles, joined only where they lie in one plane to
+    /// within `COPLANAR` of the body's size: parry joins triangles whose normals agree to
+    /// within its own tolerance, and such a face can bend by far more than round-off, which
+    /// would put a single face plane (and so the distance) off the true hull. Should the
+    /// triangulation fail, parry's faces are taken as they are.
     pub fn from_parry(poly: &parry3d_f64::shape::ConvexPolyhedron) -> Self {
         let pts = poly.points();
-        let adj = poly.vertices_adj_to_face();
-        let mut planes = Vec::with_capacity(poly.faces().len());
-        let mut faces = Vec::with_capacity(poly.faces().len());
-        for f in poly.faces() {
-            let first = f.first_vertex_or_edge as usize;
-            let mut verts: Vec<Vector> = adj[first..first + f.num_vertices_or_edges as usize]
-                .iter()
-                .map(|&i| pts[i as usize])
-                .collect();
-            let n = f.normal;
-            let centre = verts.iter().copied().sum::<Vector>() / verts.len() as Real;
-            // Order the vertices counter-clockwise about the outward normal.
-            let u = (verts[0] - centre).normalize_or_zero();
-            let v = n.cross(u);
-            verts.sort_by(|a, b| {
-                let (da, db) = (*a - centre, *b - centre);
-                let aa = da.dot(v).atan2(da.dot(u));
-                let ab = db.dot(v).atan2(db.dot(u));
-                aa.total_cmp(&ab)
-            });
-            planes.push((n, n.dot(centre)));
-            faces.push(verts);
-        }
         let mut mins = Vector::splat(Real::INFINITY);
         let mut maxs = Vector::splat(Real::NEG_INFINITY);
         for p in pts {
             mins = mins.min(*p);
             maxs = maxs.max(*p);
         }
-        Self::from_faces(planes, faces, Aabb::new(mins, maxs))
+        let bounds = Aabb::new(mins, maxs);
+        let (planes, faces) = match parry3d_f64::transformation::try_convex_hull(pts) {
+            Ok((vertices, triangles)) => planar_faces(&vertices, &triangles, bounds),
+            Err(_) => parry_faces(poly),
+        };
+        Self::from_faces(planes, faces, bounds)
     }
 
     /// From the face planes, each face's counter-clockwise vertices and the bounds.
@@ -239,4 +227,99 @@ pub(super) fn closest_on_segment(p: Vector, a: Vector, b: Vector) -> Vector {
     let l2 = e.length_squared();
     let t = if l2 > 0.0 { ((p - a).dot(e) / l2).clamp(0.0, 1.0) } else { 0.0 };
     a + e * t
+}
+
+/// How far (relative to the body's diagonal) a triangle's corners may lie off a face's plane
+/// and still belong to that face: round-off, not shape.
+const COPLANAR: Real = 1e-11;
+
+/// A face plane and its counter-clockwise vertices, as `from_faces` takes them.
+type Faces = (Vec<(Vector, Real)>, Vec<Vec<Vector>>);
+
+/// The faces of a triangulated convex hull: triangles in one plane (to within [`COPLANAR`])
+/// form one face, the convex hull of their corners in that plane. On a convex body the
+/// triangles that a plane holds are those of one face, so no adjacency is needed. Triangles
+/// of no area (collinear corners) bound nothing and are skipped.
+fn planar_faces(vertices: &[Vector], triangles: &[[u32; 3]], bounds: Aabb) -> Faces {
+    let tol = COPLANAR * (bounds.maxs - bounds.mins).length();
+    // Per face: the area-weighted normal, a point of the plane, and the corners.
+    let mut groups: Vec<(Vector, Vector, Vec<Vector>)> = Vec::new();
+    for t in triangles {
+        let [a, b, c] = t.map(|i| vertices[i as usize]);
+        let area = (b - a).cross(c - a);
+        let Some(n) = area.try_normalize() else { continue };
+        let on_plane = |(m, o, _): &&mut (Vector, Vector, Vec<Vector>)| {
+            let m = m.normalize();
+            m.dot(n) > 0.0 && [a, b, c].iter().all(|p| m.dot(*p - *o).abs() <= tol)
+        };
+        match groups.iter_mut().find(|g| on_plane(g)) {
+            Some((m, _, corners)) => {
+                *m += area;
+                corners.extend([a, b, c]);
+            }
+            None => groups.push((area, a, vec![a, b, c])),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(m, _, corners)| {
+            let n = m.normalize();
+            let offset = corners.iter().map(|p| n.dot(*p)).sum::<Real>() / corners.len() as Real;
+            ((n, offset), hull_in_plane(n, corners))
+        })
+        .unzip()
+}
+
+/// The convex hull of points in a plane of normal `n`, counter-clockwise about `n`, without
+/// points inside it or on its edges (Andrew's monotone chain).
+fn hull_in_plane(n: Vector, mut points: Vec<Vector>) -> Vec<Vector> {
+    let u = n.any_orthonormal_vector();
+    let v = n.cross(u);
+    let uv = |p: &Vector| (p.dot(u), p.dot(v));
+    points.sort_by(|p, q| {
+        let (p, q) = (uv(p), uv(q));
+        p.0.total_cmp(&q.0).then(p.1.total_cmp(&q.1))
+    });
+    points.dedup();
+    // Whether `o → a → b` turns left (counter-clockwise) in the plane.
+    let left = |o: &Vector, a: &Vector, b: &Vector| {
+        let (o, a, b) = (uv(o), uv(a), uv(b));
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0) > 0.0
+    };
+    let mut hull: Vec<Vector> = Vec::with_capacity(points.len() + 1);
+    for p in &points {
+        while hull.len() >= 2 && !left(&hull[hull.len() - 2], &hull[hull.len() - 1], p) {
+            hull.pop();
+        }
+        hull.push(*p);
+    }
+    let lower = hull.len() + 1;
+    for p in points.iter().rev().skip(1) {
+        while hull.len() >= lower && !left(&hull[hull.len() - 2], &hull[hull.len() - 1], p) {
+            hull.pop();
+        }
+        hull.push(*p);
+    }
+    hull.pop(); // the first point, closing the chain
+    hull
+}
+
+/// Parry's own faces: each face's plane through its vertices' centre, the vertices ordered
+/// counter-clockwise about the face normal.
+fn parry_faces(poly: &parry3d_f64::shape::ConvexPolyhedron) -> Faces {
+    let pts = poly.points();
+    let adj = poly.vertices_adj_to_face();
+    poly.faces()
+        .iter()
+        .map(|f| {
+            let first = f.first_vertex_or_edge as usize;
+            let verts: Vec<Vector> = adj[first..first + f.num_vertices_or_edges as usize]
+                .iter()
+                .map(|&i| pts[i as usize])
+                .collect();
+            let n = f.normal;
+            let centre = verts.iter().copied().sum::<Vector>() / verts.len() as Real;
+            ((n, n.dot(centre)), hull_in_plane(n, verts))
+        })
+        .unzip()
 }
