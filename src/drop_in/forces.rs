@@ -166,9 +166,9 @@ impl DiscreteContacts {
             pb.translation += shift;
             kb.center_of_mass += shift;
             // A live contact is evaluated (it ends there when the bodies part). Other pairs:
-            // parry's exact distance (GJK) rules out those that do not touch for a fraction of
-            // an evaluation's cost, and a pair found apart stays apart without one while the
-            // bodies have moved less than its margin.
+            // a lower bound of their distance (`separation`) rules out those that do not touch
+            // for a fraction of an evaluation's cost, and a pair found apart stays apart
+            // without one while the bodies have moved less than its margin.
             let mut state = this.states.get(&(ca, cb)).copied();
             let (sa, sb) = (this.queries[&ca].as_ref(), this.queries[&cb].as_ref());
             if state.is_none() {
@@ -177,8 +177,7 @@ impl DiscreteContacts {
                         return Ok((None, Some(*gap), None));
                     }
                 }
-                let distance = parry3d_f64::query::distance(&pa, sa, &pb, sb)
-                    .map_or(Real::NAN, |d| d.distance);
+                let distance = separation(&pa, sa, &pb, sb);
                 let margin = distance - this.reach();
                 if margin > 0.0 {
                     return Ok((None, Some(Gap { margin, poses: (pa, pb) }), None));
@@ -272,5 +271,99 @@ impl DiscreteContacts {
             }
         }
         Ok(applied)
+    }
+}
+
+/// A lower bound of the distance between two convex shapes (m; 0 when they touch or overlap,
+/// NaN when parry cannot tell), never above the true distance.
+///
+/// Parry's GJK stops on absolute tolerances, so between millimetre bodies the distance it
+/// gives can exceed the true one by tens of per cent (a pair so ruled out would start its
+/// contact already overlapping). Its closest points are points of the shapes, though, and
+/// the direction between them separates the shapes by at least the gap between their
+/// support points along it: a bound that holds at any size, and equals the distance where
+/// GJK converged. Shapes without a support map (a half-space) take parry's distance, which
+/// for them is a support point's and exact.
+fn separation(
+    pa: &Pose,
+    sa: &dyn parry3d_f64::shape::Shape,
+    pb: &Pose,
+    sb: &dyn parry3d_f64::shape::Shape,
+) -> Real {
+    use parry3d_f64::query::{closest_points, ClosestPoints};
+    match closest_points(pa, sa, pb, sb, Real::MAX) {
+        Ok(ClosestPoints::WithinMargin(p1, p2)) => {
+            let gap = p2 - p1;
+            match (sa.as_support_map(), sb.as_support_map(), gap.try_normalize()) {
+                (Some(ma), Some(mb), Some(n)) => {
+                    let apart = n.dot(mb.support_point(pb, -n)) - n.dot(ma.support_point(pa, n));
+                    apart.clamp(0.0, gap.length())
+                }
+                _ => gap.length(),
+            }
+        }
+        Ok(ClosestPoints::Intersecting) => 0.0,
+        Ok(ClosestPoints::Disjoint) | Err(_) => Real::NAN,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Rotation;
+    use parry3d_f64::shape::SharedShape;
+
+    /// Random convex pairs of every handled kind with bounds, a gap apart, at sizes from 1 mm
+    /// to 1 m: the bound never exceeds the distance parry measures at unit size (where its GJK
+    /// converges) and is within 1e-4 of that distance where the bodies are large. At 1 mm parry's own
+    /// distance overstates some of these gaps by up to a third.
+    #[test]
+    fn the_separation_never_overstates_the_gap() {
+        let mut state = 7u64;
+        let mut rnd = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as Real / (1u64 << 53) as Real * 2.0 - 1.0
+        };
+        let shape = |k: usize, s: Real, hull: &[Vector]| match k {
+            0 => SharedShape::capsule_y(0.5 * s, 0.3 * s),
+            1 => SharedShape::cylinder(0.5 * s, 0.3 * s),
+            2 => SharedShape::round_cuboid(0.5 * s, 0.3 * s, 0.2 * s, 0.05 * s),
+            3 => SharedShape::cone(0.5 * s, 0.4 * s),
+            _ => SharedShape::convex_hull(&hull.iter().map(|p| *p * s).collect::<Vec<_>>())
+                .expect("a hull of twelve points on a sphere"),
+        };
+        let mut overstated: Real = 0.0;
+        for size in [1e-3, 1e-2, 1.0] {
+            for _ in 0..300 {
+                let hull: Vec<Vector> = (0..12)
+                    .map(|_| Vector::new(rnd(), rnd(), rnd()).normalize_or(Vector::X) * 0.5)
+                    .collect();
+                let kinds = [((rnd() + 1.0) * 2.5) as usize, ((rnd() + 1.0) * 2.5) as usize];
+                let turn = |r: &mut dyn FnMut() -> Real| {
+                    Rotation::from_scaled_axis(Vector::new(r(), r(), r()) * 3.0)
+                };
+                let (ra, rb) = (turn(&mut rnd), turn(&mut rnd));
+                let dir = Vector::new(rnd(), rnd(), rnd()).normalize_or(Vector::X);
+                let at = dir * (1.1 + 0.5 * rnd());
+                let poses =
+                    |s: Real| (Pose::from_parts(Vector::ZERO, ra), Pose::from_parts(at * s, rb));
+                let (pa, pb) = poses(size);
+                let (a, b) = (shape(kinds[0], size, &hull), shape(kinds[1], size, &hull));
+                let (ua, ub) = (shape(kinds[0], 1.0, &hull), shape(kinds[1], 1.0, &hull));
+                let (upa, upb) = poses(1.0);
+                let truth = parry3d_f64::query::distance(&upa, &*ua, &upb, &*ub).unwrap().distance;
+                let bound = separation(&pa, &*a, &pb, &*b) / size;
+                assert!(
+                    bound <= truth * (1.0 + 1e-9) + 1e-12,
+                    "{kinds:?} at {size} m: {bound} > {truth}"
+                );
+                if size == 1.0 {
+                    assert!(bound >= truth * (1.0 - 1e-4), "{kinds:?}: {bound} < {truth}");
+                }
+                let parry = parry3d_f64::query::distance(&pa, &*a, &pb, &*b).unwrap().distance;
+                overstated = overstated.max(parry / size / truth - 1.0);
+            }
+        }
+        assert!(overstated > 0.05, "parry's distance overstated gaps by {overstated} at most");
     }
 }
