@@ -1364,6 +1364,51 @@ fn rubber_contact() -> ContactModel {
     )
 }
 
+/// A cube's face rocking on a floor: the law's damping spread over the footprint gives the
+/// couple `−c F_el (L²/12) ω` of a uniform pressure on a square of side `L` (the grid's
+/// footprint within a few per cent), equal and opposite on the two bodies, taking energy out
+/// (`T·ω < 0`); nothing for a spin about the normal, for both bodies turning alike, or
+/// without damping. (At its contact point alone, the damping acts on the approach there,
+/// which the rocking leaves still: nothing would damp it.)
+#[test]
+fn a_face_rocking_on_a_face_is_damped_by_a_couple() {
+    let (half, depth) = (0.01, 2e-6);
+    let cube = ConvexShape::cuboid(Vector::splat(half)).unwrap();
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    let pose = Pose::from_translation(Vector::new(0.0, half - depth, 0.0));
+    let a = BodyState::at_rest(&cube, pose);
+    let b = BodyState::at_rest(&floor, Pose::IDENTITY);
+    let geometry = rubber_contact().evaluate(&a, &b, &mut None).unwrap().unwrap().geometry;
+    let m = Material::new(5e6, 0.4).unwrap();
+    let params = PairParameters::new(&m, &m, 0.5).unwrap();
+    let c = 0.2; // s/m
+    let com_a = pose.translation;
+    let couple = |damping: f64, w_a: Vector, w_b: Vector| {
+        let ka = BodyKinematics { center_of_mass: com_a, linvel: Vector::ZERO, angvel: w_a };
+        let kb = BodyKinematics { center_of_mass: Vector::ZERO, linvel: Vector::ZERO, angvel: w_b };
+        let f = discrete_contact::contact_force(&params, damping, &geometry, &ka, &kb);
+        let x = geometry.contact_point;
+        let t_a = f.torque_on_a - (x - com_a).cross(f.force_on_a);
+        let t_b = f.torque_on_b - (x - Vector::ZERO).cross(-f.force_on_a);
+        (t_a, t_b, f)
+    };
+    let w = Vector::new(0.5, 0.0, 0.0);
+    let (t_a, t_b, f) = couple(c, w, Vector::ZERO);
+    assert!(f.approach_speed.abs() < 1e-12, "the rocking moves the contact point along the floor");
+    let side = 2.0 * half;
+    let expected = -c * f.normal_force * side * side / 12.0 * w.x;
+    println!("rocking couple {:.4e} N m, uniform pressure's {expected:.4e} N m", t_a.x);
+    assert!((t_a.x / expected - 1.0).abs() < 0.05, "couple {t_a:?}, expected {expected:e} about x");
+    assert!((t_a + t_b).length() <= 1e-12 * t_a.length(), "not a couple: {t_a:?} vs {t_b:?}");
+    assert!(t_a.dot(w) < 0.0, "the couple feeds the rocking");
+    for (damping, w_a, w_b) in
+        [(c, Vector::new(0.0, 3.0, 0.0), Vector::ZERO), (c, w, w), (0.0, w, Vector::ZERO)]
+    {
+        let (t_a, _, _) = couple(damping, w_a, w_b);
+        assert!(t_a.length() <= 1e-12 * expected.abs(), "{w_a:?}, {w_b:?}, c {damping}: {t_a:?}");
+    }
+}
+
 /// A cylinder standing on a floor: its footprint is the whole cap at every evaluation, also
 /// where the persistent grid puts the cap and the floor on node layers (each face's facet
 /// then goes to a cell that holds no volume), and an update follows a rocking tilt with the
