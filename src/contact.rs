@@ -449,16 +449,15 @@ fn through_ball_centres<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 /// (a cylinder's side and a capsule's pass through it, a cap's runs along it), so the pressure
 /// on it has no moment about the axis. The grid's contact point lies off that plane by its
 /// discretisation error, always to the same side of the grid's cells, and that moment would
-/// roll a cylinder lying on a floor away, ever faster. The contact point moves across the normal, by
-/// the least distance that puts it in the plane of the axis and the normal (in both planes,
-/// for two such bodies; on their mean where the two are nearly parallel and disagree) where
-/// the normal crosses the axis, and by less, as `sin²` of their angle, as the normal turns
-/// along the axis: the pressure on a cap runs along the axis and has no moment about it
+/// roll a cylinder lying on a floor away, ever faster. The contact point moves across the
+/// normal, by the least distance that puts it in the plane of the axis and the normal (in both
+/// planes, for two such bodies; on their mean where the two are nearly parallel and disagree)
+/// where the normal crosses the axis, and by less, as `sin²` of their angle, as the normal
+/// turns along the axis: the pressure on a cap runs along the axis and has no moment about it
 /// wherever it acts, and only the blended normal's small tilt from the axis would give the
 /// point's offset one — while that offset, across a face rocking on a face, is what rights
-/// it. Balls are left to
-/// [`through_ball_centres`]: a ball's line through its centre along the other body's gradient
-/// lies in that body's plane too.
+/// it. Balls are left to [`through_ball_centres`]: a ball's line through its centre along the
+/// other body's gradient lies in that body's plane too.
 fn about_no_axis<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     mut g: OverlapGeometry,
     a: &BodyState<'_, A>,

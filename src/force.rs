@@ -1,7 +1,7 @@
 //! The Nassauer–Kuna force law (Nassauer & Kuna 2013): normal force from overlap volume and
 //! indentation with restitution damping, friction (the slip-speed law here, the tangential
 //! spring in [`tangential`]), torques on both bodies — with the couple of the damping spread
-//! over the overlap's footprint, which damps a rocking or rolling body (`rocking_damping`).
+//! over the overlap's footprint, which damps a body rocking on a face (`rocking_damping`).
 
 use crate::error::{check_finite_vec, Result};
 use crate::material::PairParameters;

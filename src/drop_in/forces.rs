@@ -114,12 +114,11 @@ impl DiscreteContacts {
         // The film's force goes as 1/h: a gap from GJK, which between millimetre bodies can be
         // tens of per cent long, is brought to the nearest points.
         if c.dist > 0.0 {
-            let (x_a, x_b) = nearest_points((&ha.shape, a.0), (&hb.shape, b.0), c.point2);
-            let gap = (x_b - x_a).length();
-            if gap < c.dist {
-                if let Some(n) = (x_b - x_a).try_normalize() {
-                    (c.point1, c.point2, c.normal1, c.normal2, c.dist) = (x_a, x_b, n, -n, gap);
-                }
+            let (x_a, x_b) =
+                nearest_points((&ha.shape, a.0), (&hb.shape, b.0), (c.point1, c.point2));
+            if let Some(n) = (x_b - x_a).try_normalize() {
+                c.dist = (x_b - x_a).length();
+                (c.point1, c.point2, c.normal1, c.normal2) = (x_a, x_b, n, -n);
             }
         }
         let x = 0.5 * (c.point1 + c.point2);
@@ -303,8 +302,8 @@ fn separation(
     use parry3d_f64::query::{closest_points, ClosestPoints};
     match closest_points(pa, sa, pb, sb, Real::MAX) {
         Ok(ClosestPoints::WithinMargin(p1, p2)) => {
-            let (x_a, x_b) = nearest_points((a, pa), (b, pb), p2);
-            let gap = if (x_b - x_a).length() < (p2 - p1).length() { x_b - x_a } else { p2 - p1 };
+            let (x_a, x_b) = nearest_points((a, pa), (b, pb), (p1, p2));
+            let gap = x_b - x_a;
             match (sa.as_support_map(), sb.as_support_map(), gap.try_normalize()) {
                 (Some(ma), Some(mb), Some(n)) => {
                     let apart = n.dot(mb.support_point(pb, -n)) - n.dot(ma.support_point(pa, n));
@@ -323,22 +322,22 @@ fn separation(
 const NEAREST_STEPS: usize = 32;
 
 /// The nearest points of two convex bodies apart (A's, then B's, world frame), each body as
-/// its exact distance at its pose, found from `start` (a point of B near them, as parry's
-/// closest point) by alternating projections: each step takes the point onto the other body's
-/// surface along that body's distance gradient. The points' distance, an upper bound of the
-/// gap, falls to it; the steps stop when it no longer falls by more than round-off.
+/// its exact distance at its pose, found from `start`, a point of A and one of B near them
+/// (parry's closest points), by alternating projections: each step takes the point onto the
+/// other body's surface along that body's distance gradient. The points' distance, an upper
+/// bound of the gap, falls to it; the steps stop when it no longer falls by more than
+/// round-off, and never give a pair farther apart than `start`.
 fn nearest_points(
     (a, pose_a): (&ConvexShape, &Pose),
     (b, pose_b): (&ConvexShape, &Pose),
-    start: Vector,
+    start: (Vector, Vector),
 ) -> (Vector, Vector) {
     let onto = |shape: &ConvexShape, pose: &Pose, y: Vector| {
         let (d, g) = shape.distance_and_gradient(pose.inverse_transform_point(y));
         y - pose.rotation * g * d
     };
-    let mut x_b = start;
-    let mut x_a = onto(a, pose_a, x_b);
-    let mut gap = Real::INFINITY;
+    let (mut x_a, mut x_b) = start;
+    let mut gap = (x_b - x_a).length();
     for _ in 0..NEAREST_STEPS {
         let next_b = onto(b, pose_b, x_a);
         let next_a = onto(a, pose_a, next_b);
@@ -412,10 +411,10 @@ mod tests {
                 assert!(bound >= truth * (1.0 - 1e-3), "{kinds:?} at {size} m: {bound} < {truth}");
                 // The film's gap: parry's closest points brought to the nearest points.
                 use parry3d_f64::query::{closest_points, ClosestPoints};
-                if let Ok(ClosestPoints::WithinMargin(_, p2)) =
+                if let Ok(ClosestPoints::WithinMargin(p1, p2)) =
                     closest_points(&pa, &*a, &pb, &*b, Real::MAX)
                 {
-                    let (x_a, x_b) = nearest_points((&ca, &pa), (&cb, &pb), p2);
+                    let (x_a, x_b) = nearest_points((&ca, &pa), (&cb, &pb), (p1, p2));
                     let gap = (x_b - x_a).length() / size;
                     assert!(
                         gap >= bound * (1.0 - 1e-12) && gap <= truth * (1.0 + 1e-3),
