@@ -16,11 +16,13 @@
 //! forcing's momentum instead of the link-wise momentum exchange; every run),
 //! `--closed-form-spheres` (sphere pairs' overlaps in closed form instead of on the grid),
 //! `--exact-polyhedra` (cube pairs' overlaps as the exact clipped polyhedron); the contact's
-//! settings in every run: `--enlargement 0.2` (Δx, split over the pair), `--smoothing 0.5`
-//! (the `d_B` band's width, Δx), `--lubrication` (the film model of `wet_rebound`: the liquid
-//! film below 1.2 Δx with `--film-min-gap-um 16`, a virtual mass `--virtual-mass 0.8` lent to
-//! each particle over a fluid step, and no enlargement; `--film-shear` adds the film's sliding
-//! and rolling terms), `--restitution 0.926`, `--friction-scale 1` (multiplies
+//! settings in every run: `--smoothing 0.5` (the `d_B` band's width, Δx), the wet contact
+//! model — the film model of `wet_rebound` (`--lubrication`, the default: the liquid film
+//! below 1.2 Δx with `--film-min-gap-um 16`, a virtual mass `--virtual-mass 0.8` lent to each
+//! particle over a fluid step, and no enlargement; `--film-shear` adds the film's sliding and
+//! rolling terms) or the seed's enlargement model (`--enlargement-model`: the contact starts
+//! at a gap of `--enlargement 0.2` Δx, split over the pair; the peer case's default, as in
+//! the reference code) —, `--restitution 0.926`, `--friction-scale 1` (multiplies
 //! μ_s = 0.32 and μ_k = 0.16; 0 turns friction off), `--balance lattice|column|fluid` (where
 //! the balance force acts: every node, each particle receiving its nodes' share (default);
 //! each particle receiving exactly `ρ_f V a`, as from a closed column's pressure gradient; the
@@ -52,7 +54,7 @@ use discrete_contact::coupling::ForceMethod;
 use discrete_contact_validation::hindered_settling::{
     Balance, HinderedSettling, ParticleShape, SettlingResult, SettlingRun,
 };
-use discrete_contact_validation::wet_rebound::{FILM_MIN_GAP, FILM_MODEL_VIRTUAL_MASS};
+use discrete_contact_validation::wet_rebound::FILM_MIN_GAP;
 use plotters::prelude::*;
 
 /// One finished run.
@@ -85,7 +87,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let case_for =
         |shape, phi, ar, contacts| -> Result<HinderedSettling, discrete_contact::Error> {
-            let mut c = seed_case(&args, shape, phi, ar)?;
+            let mut c = seed_case(&args, shape, phi, ar, args.film_model()?)?;
             c.nodes_per_diameter = args.number("--nodes-per-d", if quick { 6.0 } else { 9.0 });
             let box_d = args.number("--box-d", if quick { 8.0 } else { 15.0 });
             c.box_nodes = (box_d * c.nodes_per_diameter).round() as usize;
@@ -327,12 +329,14 @@ fn shape_named(option: &str, name: &str) -> ParticleShape {
     }
 }
 
-/// Seed 002's case with the options every run takes (`--nc`).
+/// Seed 002's case with the options every run takes (`--nc`), with the film model (`film`)
+/// or the enlargement model.
 fn seed_case(
     args: &common::Args,
     shape: ParticleShape,
     phi: f64,
     ar: f64,
+    film: bool,
 ) -> Result<HinderedSettling, discrete_contact::Error> {
     let mut c = HinderedSettling::seed_002(shape, phi, ar)?;
     c.n_c = args.number("--nc", c.n_c as f64) as usize;
@@ -343,20 +347,18 @@ fn seed_case(
     c.exact_polyhedra = args.flag("--exact-polyhedra");
     c.smoothing_cells = args.number("--smoothing", c.smoothing_cells);
     // The film model (film, virtual mass, no enlargement) or the enlargement model.
-    let film = args.flag("--lubrication");
-    let (enlargement, virtual_mass) =
-        if film { (0.0, FILM_MODEL_VIRTUAL_MASS) } else { (c.enlargement_cells, 0.0) };
-    c.enlargement_cells = args.number("--enlargement", enlargement);
-    c.virtual_mass = args.number("--virtual-mass", virtual_mass);
     if film {
+        c = c.with_film_model();
         c.film_min_gap = Some(args.number("--film-min-gap-um", FILM_MIN_GAP * 1e6) * 1e-6);
         c.film_shear = args.flag("--film-shear");
     } else if args.flag("--film-shear") {
         return Err(discrete_contact::Error::InvalidArgument {
             name: "--film-shear",
-            allowed: "only with --lubrication (the film it adds to)",
+            allowed: "only with the film model (the film it adds to)",
         });
     }
+    c.enlargement_cells = args.number("--enlargement", c.enlargement_cells);
+    c.virtual_mass = args.number("--virtual-mass", c.virtual_mass);
     c.restitution = args.number("--restitution", c.restitution);
     if let Some(name) = args.value("--balance") {
         c.balance = Balance::named(name).ok_or(discrete_contact::Error::InvalidArgument {
@@ -378,6 +380,8 @@ fn seed_case(
 /// and MLUPs beside OpenLB 1.9's on this kind of machine.
 fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
     let steps = args.number("--peer-steps", 100.0) as u64;
+    // The reference code's model unless the film model is asked for.
+    let film = args.flag("--lubrication");
     let mut rows = Vec::new();
     println!(
         "{:>5} {:>6} {:>9} {:>8} {:>9} {:>8} {:>10} {:>8}",
@@ -385,7 +389,7 @@ fn peer_case(args: &common::Args, dir: &std::path::Path) -> Result<(), Box<dyn s
     );
     for (phi, openlb_with, openlb_without) in OPENLB {
         for contacts in [true, false] {
-            let mut case = seed_case(args, ParticleShape::Sphere, phi, 1000.0)?;
+            let mut case = seed_case(args, ParticleShape::Sphere, phi, 1000.0, film)?;
             case.contacts = contacts;
             case.duration = steps as f64 * case.dt() * case.stokes_velocity() / case.diameter;
             let r = run_with_progress(&case, &common::Checkpoints::default())?;
@@ -436,6 +440,7 @@ fn perf_table(
     dir: &std::path::Path,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let steps = args.number("--perf-steps", 600.0) as u64;
+    let film = args.film_model()?;
     let shape = shape_named("--perf-shape", args.value("--perf-shape").unwrap_or("sphere"));
     let mut rows = Vec::new();
     println!(
@@ -445,7 +450,7 @@ fn perf_table(
     for box_d in args.list("--perf-box-d", &[8.0, 15.0]) {
         for &phi in &args.list("--perf-phi", &[0.1, 0.2, 0.3]) {
             for contacts in [true, false] {
-                let mut case = seed_case(args, shape, phi, 1000.0)?;
+                let mut case = seed_case(args, shape, phi, 1000.0, film)?;
                 case.nodes_per_diameter = 6.0;
                 case.box_nodes = (box_d * case.nodes_per_diameter) as usize;
                 case.material =

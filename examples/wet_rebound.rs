@@ -16,13 +16,19 @@
 //! `target/validation/checkpoints/`) and `--resume` (go on from those files after a stop, with
 //! bit-identical results), `--forcing-momentum` (the fluid's force on the sphere as the EDM
 //! forcing's momentum instead of Wen et al.'s link-wise momentum exchange; see
-//! `hlbm::ForceMethod`), `--enlargement 0.143` (contact enlargement, in Δx: the model of
-//! Marquardt et al., the default), `--lubrication` (the film model instead: the liquid film's
-//! force below the gap the lattice resolves, see `discrete_contact::lubrication`, with a virtual
-//! mass lent to the sphere over each fluid step, see
-//! `discrete_contact::coupling::FluidSettings::with_virtual_mass`, and no enlargement) with
+//! `hlbm::ForceMethod`).
+//!
+//! The wet contact is the film model (`--lubrication`, the default): the liquid film's force
+//! below the gap the lattice resolves (see `discrete_contact::lubrication`), a virtual mass
+//! lent to the sphere over each fluid step (see
+//! `discrete_contact::coupling::FluidSettings::with_virtual_mass`) and no enlargement, with
 //! `--film-cutoff 1.2` (in Δx), `--film-min-gap-um 16` (roughness, µm) and `--virtual-mass 0.8`
-//! (its coefficient `C_V`; `--virtual-mass` and `--enlargement` also override either model's).
+//! (its coefficient `C_V`). `--enlargement-model` runs Marquardt et al.'s model instead: the
+//! contact starts at a gap of `--enlargement 0.143` Δx, which stands for the film, and no
+//! virtual mass. (`--virtual-mass` and `--enlargement` override either model's.) The film model
+//! is the default because it follows e/e_dry(St) within 0.1 from St ≈ 20 to ≈ 950 at 10 and 16
+//! nodes across the diameter, where the enlargement rebounds too high at low Stokes numbers
+//! and stays near 0.8 above St ≈ 200 (`docs/wet.md`).
 //! `--nodes-per-d 10,16` sets the resolutions as lattice nodes across the diameter instead of
 //! `--dx`.
 //!
@@ -46,9 +52,7 @@ use std::time::Instant;
 use discrete_contact::coupling::{ForceMethod, FILM_CUTOFF};
 use discrete_contact::material::Material;
 use discrete_contact::math::Vector;
-use discrete_contact_validation::wet_rebound::{
-    ReboundRun, Trajectory, WetRebound, FILM_MODEL_VIRTUAL_MASS,
-};
+use discrete_contact_validation::wet_rebound::{ReboundRun, Trajectory, WetRebound};
 use plotters::prelude::*;
 
 /// One run's settings (lengths in mm) beyond the Li (2010) case.
@@ -122,14 +126,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         c.contact = j.contact;
         // The film model (film, virtual mass, no enlargement) or the enlargement model.
-        let (enlargement, virtual_mass) =
-            if j.film { (0.0, FILM_MODEL_VIRTUAL_MASS) } else { (1.0 / 7.0, 0.0) };
-        c.enlargement = args.number("--enlargement", enlargement) * c.dx;
-        c.virtual_mass = args.number("--virtual-mass", virtual_mass);
         if j.film {
+            c = c.with_film_model();
             c.film_cutoff = Some(args.number("--film-cutoff", FILM_CUTOFF) * c.dx);
             c.film_min_gap = args.number("--film-min-gap-um", c.film_min_gap * 1e6) * 1e-6;
         }
+        if let Some(e) = args.value("--enlargement") {
+            c.enlargement = e.parse::<f64>().expect("--enlargement: a number") * c.dx;
+        }
+        c.virtual_mass = args.number("--virtual-mass", c.virtual_mass);
         if args.flag("--forcing-momentum") {
             c.force_method = ForceMethod::Forcing;
         }
@@ -161,7 +166,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         let rho_p = args.number("--rho-p", li.particle_density);
         let mu = args.number("--mu", li.viscosity);
-        let film = args.flag("--lubrication");
+        let film = args.film_model()?;
         for &dx in &dxs {
             for &h0 in &h0s {
                 jobs.push(Job { h0, dx, rho_p, mu, contact: true, film });

@@ -152,21 +152,24 @@ fn the_fluid_acts_on_a_body_across_periodic_faces_as_inside_the_box() {
     }
 }
 
+/// With the seed's enlargement and with the film model (the liquid film and the virtual mass).
 #[test]
 fn a_periodic_wet_run_gives_the_same_result_on_one_and_two_threads() {
     let mut case = HinderedSettling::seed_002(ParticleShape::Sphere, 0.3, 1000.0).unwrap();
     case.nodes_per_diameter = 6.0;
     case.box_nodes = 24;
     case.duration = 400.0 * case.dt() * case.stokes_velocity() / case.diameter;
-    let on = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| run(&case, |_| {}).unwrap())
-    };
-    let (one, two) = (on(1), on(2));
-    assert!(one.max_contacts > 0, "the run has contacts");
-    assert!(one.samples.len() >= 5);
-    assert_eq!(one.samples, two.samples, "⟨v⟩/v_s over time");
-    assert!(one.samples.iter().all(|s| s.1.is_finite()));
+    for case in [case.clone(), case.with_film_model()] {
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| run(&case, |_| {}).unwrap())
+        };
+        let (one, two) = (on(1), on(2));
+        assert!(one.max_contacts > 0, "the run has contacts");
+        assert!(one.samples.len() >= 5);
+        assert_eq!(one.samples, two.samples, "⟨v⟩/v_s over time");
+        assert!(one.samples.iter().all(|s| s.1.is_finite()));
+    }
 }
 
 /// A sphere alone in a triply periodic box is a simple cubic array: in Stokes flow it settles

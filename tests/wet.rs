@@ -6,15 +6,13 @@
 
 use std::sync::OnceLock;
 
-use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod, FILM_CUTOFF};
+use discrete_contact::coupling::{Fluid, FluidSettings, ForceMethod};
 use discrete_contact::hlbm::correlations::{
     di_felice_wall_factor, schiller_naumann_terminal_velocity,
 };
 use discrete_contact::math::{Real, Rotation, Vector};
 use discrete_contact::rapier3d_f64::prelude::*;
-use discrete_contact_validation::wet_rebound::{
-    run, Trajectory, WetRebound, FILM_MODEL_VIRTUAL_MASS,
-};
+use discrete_contact_validation::wet_rebound::{run, Trajectory, WetRebound};
 
 #[test]
 fn coupled_sphere_settles_at_the_drag_laws_terminal_velocity() {
@@ -126,10 +124,7 @@ fn wet_rebound_creates_no_energy() {
 /// sphere higher than it fell.
 #[test]
 fn wet_rebound_with_the_film_model_creates_no_energy() {
-    let mut case = coarse(true);
-    case.film_cutoff = Some(FILM_CUTOFF * case.dx);
-    case.enlargement = 0.0;
-    case.virtual_mass = FILM_MODEL_VIRTUAL_MASS;
+    let case = coarse(true).with_film_model();
     let t = run(&case, |_, _| {}).unwrap();
     creates_no_energy(&case, &t);
 }

@@ -158,6 +158,17 @@ impl Args {
         Self(args)
     }
 
+    /// Whether a wet run takes the film model (the default, or `--lubrication`) rather than
+    /// the enlargement model (`--enlargement-model`); naming both is an error.
+    pub fn film_model(&self) -> Result<bool, discrete_contact::Error> {
+        match (self.flag("--lubrication"), self.flag("--enlargement-model")) {
+            (true, true) => Err(discrete_contact::Error::InvalidArgument {
+                name: "--enlargement-model",
+                allowed: "without --lubrication (one wet contact model)",
+            }),
+            (_, enlargement) => Ok(!enlargement),
+        }
+    }
     /// Whether `name` was given.
     pub fn flag(&self, name: &str) -> bool {
         self.0.iter().any(|a| a == name)

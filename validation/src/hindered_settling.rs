@@ -35,6 +35,8 @@ use discrete_contact::periodic::{CellGrid, PeriodicBox};
 use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
 use discrete_contact::tangential::TangentialLaw;
 
+use crate::wet_rebound::{FILM_MIN_GAP, FILM_MODEL_VIRTUAL_MASS};
+
 /// Standard gravity (m/s²).
 const G: Real = 9.81;
 
@@ -210,6 +212,17 @@ impl HinderedSettling {
             seed: 2,
             balance: Balance::default(),
         })
+    }
+
+    /// The film model of the wet rebound ([`WetRebound::with_film_model`](crate::wet_rebound::WetRebound::with_film_model))
+    /// in place of the seed's enlargement: the liquid film below `FILM_CUTOFF` Δx with the
+    /// minimum gap [`FILM_MIN_GAP`], the virtual mass [`FILM_MODEL_VIRTUAL_MASS`] and no
+    /// enlargement.
+    pub fn with_film_model(mut self) -> Self {
+        self.enlargement_cells = 0.0;
+        self.virtual_mass = FILM_MODEL_VIRTUAL_MASS;
+        self.film_min_gap = Some(FILM_MIN_GAP);
+        self
     }
 
     /// Kinematic viscosity from the Archimedes number (m²/s).
