@@ -54,6 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         max_indentation,
         substeps,
         evaluations: (evaluations, full),
+        refreshes,
         wall,
         rows,
         ..
@@ -74,6 +75,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "  contact evaluations: {evaluations}, of them full {full} ({:.1} %)",
         100.0 * full as f64 / evaluations.max(1) as f64
     );
+    println!("  full evaluations by cause: {refreshes}");
     println!("  wall-time ratio discrete / rapier: {:.0}", wall / rapier_wall);
     println!("wrote {}", path.display());
     Ok(())

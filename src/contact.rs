@@ -167,9 +167,9 @@ impl Lens {
 }
 
 impl Reference {
-    /// The geometry after A moved (relative to B) to `relative`, or `None` when the motion
-    /// exceeds the allowances of the reuse `fraction` (see
-    /// [`ContactModel::with_geometry_reuse`]) or would part the bodies.
+    /// The geometry after A moved (relative to B) to `relative`, or why a full evaluation is
+    /// needed instead: the motion exceeds the allowances of the reuse `fraction` (see
+    /// [`ContactModel::with_geometry_reuse`]), or the update lost the overlap.
     fn update<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         shapes: (&A, &B),
@@ -177,7 +177,7 @@ impl Reference {
         pose_b: &Pose,
         corrected_box: Aabb,
         fraction: Real,
-    ) -> Option<OverlapGeometry> {
+    ) -> core::result::Result<OverlapGeometry, Refresh> {
         let motion = self.motion_since(relative);
         let q = motion.rotation;
         // A rotation by θ moves a point at distance r by its chord 2 r sin(θ/2) = 2 r |q_xyz|.
@@ -211,27 +211,34 @@ impl Reference {
         // A lens follows its exact law, so only the grid's own error, which hardly changes with
         // the lens's size, is left for the allowance on its approach.
         let allowance = if self.lens.is_some() { LENS_ALLOWANCE } else { 1.0 };
-        if !(approach.abs() + tilt <= allowance * fraction * self.indentation
-            && travel <= fraction * self.cell)
-        {
-            return None;
+        let limit = allowance * fraction * self.indentation;
+        // The tilt is never negative: an approach beyond the limit is the approach's doing.
+        if !(approach.abs() <= limit) {
+            return Err(Refresh::Approach);
         }
-        let (volume, indentation, surface_area) = self.grown(shapes, relative, approach)?;
+        if !(approach.abs() + tilt <= limit) {
+            return Err(Refresh::Tilt);
+        }
+        if !(travel <= fraction * self.cell) {
+            return Err(Refresh::Travel);
+        }
+        let (volume, indentation, surface_area) =
+            self.grown(shapes, relative, approach).ok_or(Refresh::Lost)?;
         // The normal turns as the surfaces' own normal there does.
         let (before, now) = (
             (self.gradients[1] - self.gradients[0]).normalize_or_zero(),
             (gradients[1] - gradients[0]).normalize_or_zero(),
         );
         if before == Vector::ZERO || now == Vector::ZERO || !now.is_finite() {
-            return None;
+            return Err(Refresh::Lost);
         }
         let normal = Rotation::from_rotation_arc(before, now) * self.normal;
         let volume = volume + tilted.volume;
         if !(volume > 0.0) {
-            return None;
+            return Err(Refresh::Lost);
         }
         let contact_point = contact_point + tilted.shift;
-        Some(OverlapGeometry {
+        Ok(OverlapGeometry {
             volume,
             contact_point: pose_b.transform_point(contact_point),
             normal: pose_b.rotation * normal,
@@ -594,6 +601,83 @@ fn relative_pose(a: &Pose, b: &Pose) -> Pose {
     b.inverse() * *a
 }
 
+/// Why an evaluation integrated the overlap in full rather than updating the last full
+/// geometry (see [`ContactModel::with_geometry_reuse`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Refresh {
+    /// Geometry reuse is off, or the pair has an exact form, which costs less than an update.
+    Off,
+    /// A new contact: there is no full geometry to update.
+    FirstTouch,
+    /// The approach at the contact point exceeded its allowance.
+    Approach,
+    /// The approach was within its allowance, the approach plus the tilt across the overlap
+    /// was not.
+    Tilt,
+    /// The contact travelled across the grid by more than its allowance.
+    Travel,
+    /// The update lost the overlap: the bodies would part, or a surface gradient vanished.
+    Lost,
+}
+
+/// Full evaluations counted by why each was full ([`Refresh`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Refreshes {
+    /// [`Refresh::Off`].
+    pub off: usize,
+    /// [`Refresh::FirstTouch`].
+    pub first_touch: usize,
+    /// [`Refresh::Approach`].
+    pub approach: usize,
+    /// [`Refresh::Tilt`].
+    pub tilt: usize,
+    /// [`Refresh::Travel`].
+    pub travel: usize,
+    /// [`Refresh::Lost`].
+    pub lost: usize,
+}
+
+impl Refreshes {
+    /// Counts one full evaluation, full for `why`.
+    pub fn count(&mut self, why: Refresh) {
+        *match why {
+            Refresh::Off => &mut self.off,
+            Refresh::FirstTouch => &mut self.first_touch,
+            Refresh::Approach => &mut self.approach,
+            Refresh::Tilt => &mut self.tilt,
+            Refresh::Travel => &mut self.travel,
+            Refresh::Lost => &mut self.lost,
+        } += 1;
+    }
+
+    /// All full evaluations counted.
+    pub fn total(&self) -> usize {
+        self.off + self.first_touch + self.approach + self.tilt + self.travel + self.lost
+    }
+}
+
+impl core::ops::AddAssign for Refreshes {
+    fn add_assign(&mut self, o: Self) {
+        self.off += o.off;
+        self.first_touch += o.first_touch;
+        self.approach += o.approach;
+        self.tilt += o.tilt;
+        self.travel += o.travel;
+        self.lost += o.lost;
+    }
+}
+
+impl core::fmt::Display for Refreshes {
+    /// `first touch N, approach N, tilt N, travel N, lost N, reuse off N`.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "first touch {}, approach {}, tilt {}, travel {}, lost {}, reuse off {}",
+            self.first_touch, self.approach, self.tilt, self.travel, self.lost, self.off
+        )
+    }
+}
+
 /// Geometry and force of one evaluation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContactOutput {
@@ -604,8 +688,15 @@ pub struct ContactOutput {
     pub geometry: OverlapGeometry,
     /// Force and torques.
     pub force: ContactForce,
+    /// Why the geometry was integrated in full; `None`: it was updated from the last full one.
+    pub refresh: Option<Refresh>,
+}
+
+impl ContactOutput {
     /// Whether the geometry was integrated in full (`false`: updated from the last full one).
-    pub full: bool,
+    pub fn full(&self) -> bool {
+        self.refresh.is_some()
+    }
 }
 
 /// The geometry reuse fraction by default: the indentation may change by this fraction of
@@ -674,19 +765,19 @@ impl ContactModel {
         a.kinematics.check("kinematics of body A")?;
         b.kinematics.check("kinematics of body B")?;
         let relative = relative_pose(&a.pose, &b.pose);
-        let updated = state.as_ref().filter(|_| self.reuse > 0.0).and_then(|s| {
-            s.reference.as_ref()?.update(
-                (a.shape, b.shape),
-                &relative,
-                &b.pose,
-                s.corrected_box,
-                self.reuse,
-            )
-        });
-        let full = updated.is_none();
+        let updated = match state {
+            None => Err(Refresh::FirstTouch),
+            Some(s) => match &s.reference {
+                Some(r) if self.reuse > 0.0 => {
+                    r.update((a.shape, b.shape), &relative, &b.pose, s.corrected_box, self.reuse)
+                }
+                _ => Err(Refresh::Off),
+            },
+        };
+        let refresh = updated.as_ref().err().copied();
         let geometry = match updated {
-            Some(g) => g,
-            None => {
+            Ok(g) => g,
+            Err(_) => {
                 let previous = state.as_ref().map(|s| s.corrected_box);
                 let Some(g) = compute_overlap(
                     a.shape,
@@ -723,7 +814,7 @@ impl ContactModel {
             s.damping = self.params.damping_for(approach);
             s.reference_approach_speed = approach;
         }
-        if full {
+        if refresh.is_some() {
             s.corrected_box = geometry.corrected_box;
             // An exact form (closed-form spheres, exact polyhedra) costs less than an update.
             let reuse = self.reuse > 0.0
@@ -751,7 +842,7 @@ impl ContactModel {
                 &b.pose,
             );
         }
-        Ok(Some(ContactOutput { geometry, force, full }))
+        Ok(Some(ContactOutput { geometry, force, refresh }))
     }
 
     /// What the updates until the next full evaluation start from (see

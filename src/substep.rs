@@ -74,6 +74,8 @@ pub struct StepStats {
     /// Of these, the ones integrated in full (the rest updated their last full geometry, see
     /// `DiscreteContacts::with_geometry_reuse`).
     pub full_evaluations: usize,
+    /// The full evaluations counted by why each was full.
+    pub refreshes: crate::contact::Refreshes,
     /// Times the bounding-sphere neighbour list was rebuilt during the step (usually 0: it
     /// lasts until some body may have moved half its skin, a tenth of the smallest bounding
     /// radius).

@@ -391,7 +391,7 @@ fn drop_on_wall(
         let out = model.evaluate(&body, &wall, state).unwrap();
         if let Some(o) = &out {
             (peak, full, all) =
-                (peak.max(o.force.normal_force), full + usize::from(o.full), all + 1);
+                (peak.max(o.force.normal_force), full + usize::from(o.full()), all + 1);
         }
         out.map_or(0.0, |o| o.force.force_on_a.y)
     };
@@ -515,7 +515,7 @@ fn tumble_on_wall(
             let out = model.evaluate(&body, &wall, state).unwrap();
             if let Some(o) = &out {
                 (peak, full, all) =
-                    (peak.max(o.force.normal_force), full + usize::from(o.full), all + 1);
+                    (peak.max(o.force.normal_force), full + usize::from(o.full()), all + 1);
             }
             out.map_or((Vector::ZERO, Vector::ZERO), |o| (o.force.force_on_a, o.force.torque_on_a))
         };
@@ -622,7 +622,7 @@ fn geometry_reuse_moves_the_contact_point_as_a_tilt_does() {
         evaluate(&reuse, 0.0, &mut state);
         let updated = evaluate(&reuse, angle, &mut state);
         let exact = evaluate(&full, angle, &mut None);
-        assert!(!updated.full, "a tilt of {angle} rad within the allowance is an update");
+        assert!(!updated.full(), "a tilt of {angle} rad within the allowance is an update");
         let moved = (exact.geometry.contact_point - level.geometry.contact_point).length();
         let off = (updated.geometry.contact_point - exact.geometry.contact_point).length();
         let (t_exact, t_updated) = (torque(&exact), torque(&updated));
@@ -673,7 +673,7 @@ fn geometry_reuse_takes_the_approach_at_the_contact_on_a_long_body() {
     evaluate(&reuse, &at(0.08, 0.0), &mut state);
     let updated = evaluate(&reuse, &at(0.08, 3e-6), &mut state);
     let exact = evaluate(&full, &at(0.08, 3e-6), &mut None).geometry;
-    assert!(!updated.full, "3 µm of 20 µm is within the allowance");
+    assert!(!updated.full(), "3 µm of 20 µm is within the allowance");
     let (dd, dv) = (exact.indentation - start.indentation, exact.volume - start.volume);
     let (off_d, off_v) = (
         (updated.geometry.indentation - exact.indentation).abs(),
@@ -690,12 +690,42 @@ fn geometry_reuse_takes_the_approach_at_the_contact_on_a_long_body() {
     let slid = evaluate(&reuse, &at(0.0802, 0.0), &mut state);
     let exact = evaluate(&full, &at(0.0802, 0.0), &mut None).geometry;
     let off = (slid.geometry.indentation / exact.indentation - 1.0).abs();
-    println!("slid 0.2 mm: full evaluation {}, indentation off by {off:.2e}", slid.full);
+    println!("slid 0.2 mm: full evaluation {}, indentation off by {off:.2e}", slid.full());
     assert!(
-        !slid.full && off < 0.01,
+        !slid.full() && off < 0.01,
         "slid: full evaluation {}, indentation off by {off:.2e}",
-        slid.full
+        slid.full()
     );
+}
+
+/// A full evaluation says why it was full: a new contact; with geometry reuse on, the motion
+/// that exceeded its allowance (a cube resting 20 µm deep on a plank, so 5 µm of approach at
+/// the default reuse): pressed 8 µm further in, turned by 1 mrad about its centre (the face's
+/// far edge sinks ~7 µm, the centre does not), slid by 1 mm (the grid's cell is ~1.7 mm); and
+/// with reuse off, every evaluation.
+#[test]
+fn a_full_evaluation_says_why_it_was_full() {
+    use discrete_contact::contact::Refresh;
+    let (full, reuse) = full_and_reused(5e8, 0.35, 6);
+    let r = 0.005;
+    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
+    let plank = ConvexShape::cuboid(Vector::new(0.1, 0.005, 0.02)).unwrap();
+    let b = BodyState::at_rest(&plank, Pose::IDENTITY);
+    let at = |x: f64, sink: f64, turn: f64| {
+        let centre = Vector::new(x, 0.005 + r - 2e-5 - sink, 0.0);
+        BodyState::at_rest(&cube, Pose::from_parts(centre, Rotation::from_rotation_z(turn)))
+    };
+    let why = |m: &ContactModel, moved: BodyState<ConvexShape>| {
+        let mut state = None;
+        let first = m.evaluate(&at(0.0, 0.0, 0.0), &b, &mut state).unwrap().expect("overlap");
+        assert_eq!(first.refresh, Some(Refresh::FirstTouch));
+        m.evaluate(&moved, &b, &mut state).unwrap().expect("overlap").refresh
+    };
+    assert_eq!(why(&reuse, at(0.0, 1e-6, 0.0)), None, "1 µm of 5 µm is an update");
+    assert_eq!(why(&reuse, at(0.0, 8e-6, 0.0)), Some(Refresh::Approach));
+    assert_eq!(why(&reuse, at(0.0, 0.0, 1e-3)), Some(Refresh::Tilt));
+    assert_eq!(why(&reuse, at(1e-3, 0.0, 0.0)), Some(Refresh::Travel));
+    assert_eq!(why(&full, at(0.0, 1e-6, 0.0)), Some(Refresh::Off));
 }
 
 /// A persistent contact follows its overlap from sub-step to sub-step (sub-cell mode reuses
@@ -1247,7 +1277,7 @@ fn a_ball_rolling_on_a_face_is_updated_as_on_a_half_space() {
                 Pose::from_parts(Vector::new(x, r - depth, 0.0), Rotation::from_rotation_z(-x / r));
             let body = BodyState::at_rest(&ball, at);
             let out = reused.evaluate(&body, &wall, &mut state).unwrap().unwrap();
-            full += usize::from(out.full);
+            full += usize::from(out.full());
             let exact = model.evaluate(&body, &wall, &mut None).unwrap().unwrap();
             let err = (out.force.force_on_a - exact.force.force_on_a).length()
                 / exact.force.force_on_a.length();
@@ -1288,7 +1318,7 @@ fn a_ball_spinning_against_another_is_updated_without_full_evaluations() {
         let at = Pose::from_parts(Vector::new(0.0, 2.0 * r - 2e-4, 0.0), turn);
         let body = BodyState::at_rest(&ball, at);
         let out = reused.evaluate(&body, &other, &mut state).unwrap().unwrap();
-        full += usize::from(out.full);
+        full += usize::from(out.full());
         let f0: Vector = *first.get_or_insert(out.force.force_on_a);
         let err = (out.force.force_on_a - f0).length() / f0.length();
         assert!(err < 1e-9, "turned {i}°: force off by {err:.2e}");
@@ -1334,7 +1364,7 @@ fn a_lens_is_updated_by_its_exact_law() {
             let reference = full.evaluate(&a, &b, &mut full_state).unwrap().unwrap();
             let lens = exact.evaluate(&a, &b, &mut exact_state).unwrap().unwrap();
             let now = out.geometry.volume / lens.geometry.volume;
-            if out.full {
+            if out.full() {
                 fulls += 1;
             } else {
                 assert!(
@@ -1443,7 +1473,7 @@ fn a_flat_face_on_a_floor_keeps_its_whole_footprint() {
         assert!((area - 1.0).abs() < 0.02, "tilt step {k}: footprint {area:.4} of the cap");
         if k > 0 {
             let (updated, exact) = (torque(&out, &pose), torque(&full, &pose));
-            assert!(!out.full, "tilt step {k}: the update should follow the tilt");
+            assert!(!out.full(), "tilt step {k}: the update should follow the tilt");
             worst = worst.max((updated / exact - 1.0).abs());
         }
     }

@@ -369,3 +369,59 @@ fn a_cylinder_lying_on_a_floor_does_not_roll_away() {
     println!("rolls at {roll:.2e} rad/s, {travel:.2e} m away after 1.5 s");
     assert!(roll < 1e-4 && travel < 1e-5, "it rolls at {roll:e} rad/s, {travel:e} m away");
 }
+
+/// `ball_on_floor` (all handled) with a steel ball of the same size that is not handled,
+/// dropped beside the other from 1 cm up, its active collision types `types`, after `steps`
+/// steps: the world, the floor's, the handled ball's and the other ball's colliders, and the
+/// two balls' bodies.
+fn beside_a_ball_left_to_rapier(
+    types: ActiveCollisionTypes,
+    steps: usize,
+) -> (PhysicsWorld, [ColliderHandle; 3], [RigidBodyHandle; 2]) {
+    use discrete_contact::math::Vector;
+    let (mut world, mut contacts, ball) =
+        ball_on_floor(1e-3, StepPolicy::AutoSubstep { max_substeps: 5000 });
+    let floor = world.colliders.iter().find(|(_, c)| c.shape().as_halfspace().is_some()).unwrap().0;
+    let handled = world.bodies[ball].colliders()[0];
+    let free =
+        world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.1, 0.02, 0.0)));
+    let other = world.insert_collider(
+        ColliderBuilder::ball(0.01).density(7800.0).active_collision_types(types),
+        Some(free),
+    );
+    for _ in 0..steps {
+        contacts.step(&mut world).unwrap();
+    }
+    (world, [floor, handled, other], [ball, free])
+}
+
+/// Rapier's broad phase pairs no two handled colliders while a step runs (their active
+/// collision types are cleared for it and given back after), and a collider that is not
+/// handled keeps rapier's own contacts with handled ones: a ball left to rapier rests on the
+/// handled floor. Where a collider that is not handled admits fewer pair types than the
+/// handled ones, the types are left alone, so its pairs stay as the user set them.
+#[test]
+fn rapier_pairs_no_handled_colliders_and_keeps_its_own_contacts() {
+    let (world, [floor, handled, other], [ball, free]) =
+        beside_a_ball_left_to_rapier(ActiveCollisionTypes::default(), 300);
+    let types = |c: ColliderHandle| world.colliders[c].active_collision_types();
+    assert_eq!(types(floor), ActiveCollisionTypes::default(), "given back after the step");
+    assert_eq!(types(handled), ActiveCollisionTypes::default());
+    assert!(
+        world.narrow_phase.contact_pair(floor, handled).is_none(),
+        "rapier paired two handled colliders"
+    );
+    let y = world.bodies[free].translation().y;
+    assert!(
+        world.narrow_phase.contact_pair(floor, other).is_some_and(|p| p.has_any_active_contact())
+            && (y - 0.01).abs() < 1e-3,
+        "the ball left to rapier must rest on the floor by rapier's contact: y = {y}"
+    );
+    assert!(world.bodies[ball].translation().y > 0.0099, "the handled ball went through the floor");
+
+    // Admitting only dynamic–fixed pairs, the ball left to rapier admits less than the handled
+    // colliders (default types): their types stay, and rapier pairs them as before.
+    let (world, [floor, handled, _], _) =
+        beside_a_ball_left_to_rapier(ActiveCollisionTypes::DYNAMIC_FIXED, 3);
+    assert!(world.narrow_phase.contact_pair(floor, handled).is_some(), "the types must stay");
+}

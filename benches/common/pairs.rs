@@ -1,6 +1,9 @@
 //! The contact pairs the `contact` bench times and the `contact_profile` example loops over:
-//! two touching spheres, a tilted cylinder on a plane, two cubes, two rocks (convex hulls of
+//! two touching spheres, a tilted cylinder on a plane, two cylinders crossed on their curved
+//! sides (the `drop_in` scene's costliest kind of pair), two cubes, two rocks (convex hulls of
 //! twelve points, as in the `drop_in` scene) and a capsule across a cylinder, each overlapping.
+
+use core::f64::consts::FRAC_PI_2;
 
 use discrete_contact::prelude::*;
 use discrete_contact_validation::drop_in::{rock_points, xorshift};
@@ -28,6 +31,13 @@ pub fn pairs() -> Vec<(&'static str, ConvexShape, Pose, ConvexShape, Pose)> {
             Pose::from_parts(Vector::new(0.0, 0.0039, 0.0), tilt),
             ConvexShape::half_space(Vector::Y).unwrap(),
             Pose::IDENTITY,
+        ),
+        (
+            "cylinder_cylinder",
+            ConvexShape::cylinder(0.01, 0.005).unwrap(),
+            Pose::from_parts(Vector::new(0.0, 0.0099, 0.0), Rotation::from_rotation_z(FRAC_PI_2)),
+            ConvexShape::cylinder(0.01, 0.005).unwrap(),
+            Pose::from_parts(Vector::ZERO, Rotation::from_rotation_x(FRAC_PI_2)),
         ),
         (
             "cube_cube",

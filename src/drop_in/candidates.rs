@@ -1,24 +1,28 @@
 //! The handled pairs that may touch: bounded pairs from the drop-in's own bounding-sphere
-//! neighbour list (through periodic faces), half-space pairs from rapier, and the look-ahead
-//! pairs the sub-step count considers; rapier's pair rules applied to each, the user's
-//! `filter_contact_pair` hook among them.
+//! neighbour list (through periodic faces), half-space pairs from each half-space's plane, and
+//! the look-ahead pairs the sub-step count considers; rapier's pair rules applied to each, the
+//! user's `filter_contact_pair` hook among them.
 
 use super::*;
 
 impl DiscreteContacts {
-    /// Handled pairs that may touch now: the bounded pairs whose bounding spheres grown by the
-    /// contact margin meet (through the periodic faces, with the image shift, in a periodic
-    /// box) and rapier's pairs with a half-space. Rapier's own broad phase is not asked for the
-    /// bounded pairs: its margins follow `length_unit`, so a scene of centimetre bodies left at
-    /// 1 m pairs each body with dozens (14 000 pairs for the 180 bodies of `drop_in`, against
-    /// ~1 500 whose spheres meet).
+    /// Handled pairs that may touch now: the pairs with a half-space and the bounded pairs
+    /// whose bounding spheres grown by the contact margin meet (through the periodic faces,
+    /// with the image shift, in a periodic box). Rapier's own broad phase is not asked: its
+    /// margins follow `length_unit`, so a scene of centimetre bodies left at 1 m pairs each
+    /// body with dozens (14 000 pairs for the 180 bodies of `drop_in`, against ~1 500 whose
+    /// spheres meet), and a step keeps it from pairing handled colliders at all (see
+    /// `set_aside_collision_types`).
     pub(super) fn candidate_pairs(
         &self,
         world: &PhysicsWorld,
         hooks: &dyn PhysicsHooks,
     ) -> Result<Vec<Candidate>> {
-        let mut pairs: Vec<Candidate> =
-            self.rapier_half_space_pairs(world, hooks).map(|(a, b)| (a, b, Vector::ZERO)).collect();
+        let mut pairs: Vec<Candidate> = self
+            .half_space_pairs(world, hooks)
+            .into_iter()
+            .map(|(a, b)| (a, b, Vector::ZERO))
+            .collect();
         let margin = self.margin();
         pairs.extend(self.sphere_pairs(world, hooks, |_, _| margin)?);
         Ok(pairs)
@@ -50,8 +54,8 @@ impl DiscreteContacts {
             && cb.is_enabled()
             && !ca.is_sensor()
             && !cb.is_sensor()
-            && (ca.active_collision_types().test(ta, tb)
-                || cb.active_collision_types().test(ta, tb))
+            && (self.collision_types(a, ca).test(ta, tb)
+                || self.collision_types(b, cb).test(ta, tb))
             && ca.collision_groups().test(cb.collision_groups())
             && ca.solver_groups().test(cb.solver_groups())
             && Self::joints_allow(world, ca.parent(), cb.parent())
@@ -100,24 +104,31 @@ impl DiscreteContacts {
         planes
     }
 
-    /// Rapier's pairs of two handled colliders of which one is unbounded (a half-space): the
-    /// bounded pairs come from the neighbour list. Read from each half-space's own pairs, not
-    /// from all of rapier's (thousands where its length unit is far above the bodies' size).
-    pub(super) fn rapier_half_space_pairs<'w>(
-        &'w self,
-        world: &'w PhysicsWorld,
-        hooks: &'w dyn PhysicsHooks,
-    ) -> impl Iterator<Item = (ColliderHandle, ColliderHandle)> + 'w {
+    /// The pairs of two handled colliders of which one is unbounded (a half-space), the
+    /// lower handle first, in the half-spaces' handle order and then the other collider's:
+    /// every such pair that rapier's rules admit, as rapier's broad phase pairs a half-space
+    /// (its box is unbounded) with every collider — a few per body, whose gap the candidates'
+    /// check answers from its cache while the body stays far.
+    pub(super) fn half_space_pairs(
+        &self,
+        world: &PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+    ) -> Vec<(ColliderHandle, ColliderHandle)> {
         let key = |c: &ColliderHandle| c.into_raw_parts();
-        self.half_spaces().into_iter().flat_map(move |p| {
-            world.narrow_phase.contact_pairs_with(p).filter_map(move |pair| {
-                let (a, b) = (pair.collider1, pair.collider2);
-                let other = if a == p { b } else { a };
-                // A pair of two half-spaces once, from the first of them.
-                let once = self.handled.get(&other)?.radius.is_finite() || key(&p) < key(&other);
-                (once && self.interact(world, hooks, a, b)).then_some((a, b))
-            })
-        })
+        let mut others: Vec<ColliderHandle> = self.handled.keys().copied().collect();
+        others.sort_by_key(key);
+        let mut pairs = Vec::new();
+        for p in self.half_spaces() {
+            for &c in &others {
+                // Two half-spaces once, from the first of them.
+                let once = self.handled[&c].radius.is_finite() || key(&p) < key(&c);
+                let pair = if key(&p) < key(&c) { (p, c) } else { (c, p) };
+                if c != p && once && self.interact(world, hooks, pair.0, pair.1) {
+                    pairs.push(pair);
+                }
+            }
+        }
+        pairs
     }
 
     /// Half the reach of a pair — the contact enlargement, or the lubrication cut-off if that
@@ -180,9 +191,10 @@ impl DiscreteContacts {
         self.neighbours.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).list.builds()
     }
 
-    /// Handled pairs that may touch during the next `dt`: the candidates, plus pairs whose
-    /// bounding spheres (or sphere and half-space) can meet at their current speeds — rapier
-    /// only knows a pair after a step has run its broad phase, too late for a fast stiff impact.
+    /// Handled pairs that may touch during the next `dt`: the pairs with a half-space, and
+    /// those whose bounding spheres, grown by the contact margin, can meet at their current
+    /// speeds — the candidates and the pairs a fast stiff impact will make before the step
+    /// ends.
     pub(super) fn lookahead_pairs(
         &self,
         world: &PhysicsWorld,
@@ -196,32 +208,9 @@ impl DiscreteContacts {
         let margin = self.margin();
         // Spheres grown by the margin and the distance they travel: the periodic candidates
         // and more.
-        let reached = self.sphere_pairs(world, hooks, |h, k| margin + speed(h, k) * dt)?;
-        // Rapier's pairs with a half-space, then the list's.
-        let mut pairs: Vec<(ColliderHandle, ColliderHandle)> =
-            self.rapier_half_space_pairs(world, hooks).collect();
-        let known: std::collections::HashSet<
-            (ColliderHandle, ColliderHandle),
-            foldhash::fast::FixedState,
-        > = pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]).collect();
-        pairs.extend(reached.into_iter().map(|(a, b, _)| (a, b)));
-        // Half-spaces against bounded bodies: few half-spaces, so a plain loop.
-        for p in self.half_spaces() {
-            let ColliderMotion { pose, kinematics: kp, .. } = Self::kinematics(world, p);
-            let ConvexShape::HalfSpace { normal } = self.handled[&p].shape else { continue };
-            let (n, on_plane) = (pose.rotation * normal, pose.translation);
-            for (&c, h) in self.handled.iter().filter(|(_, h)| h.radius.is_finite()) {
-                let ColliderMotion { pose: pose_c, kinematics: kc, .. } =
-                    Self::kinematics(world, c);
-                let gap = n.dot(pose_c.transform_point(h.centre) - on_plane) - h.radius;
-                if gap <= (speed(h, &kc) + speed(&self.handled[&p], &kp)) * dt
-                    && !known.contains(&(p, c))
-                    && self.interact(world, hooks, p, c)
-                {
-                    pairs.push((p, c));
-                }
-            }
-        }
+        let reach = |h: &Handled, k: &BodyKinematics| margin + speed(h, k) * dt;
+        let mut pairs = self.half_space_pairs(world, hooks);
+        pairs.extend(self.sphere_pairs(world, hooks, reach)?.into_iter().map(|(a, b, _)| (a, b)));
         Ok(pairs)
     }
 }

@@ -218,11 +218,8 @@ impl DiscreteContacts {
                 &mut state,
             )?;
             Ok((
-                out.zip(state).map(|(out, state)| Evaluated {
-                    pair: (ca, cb),
-                    bodies: (ba, bb),
-                    out,
-                    state,
+                out.zip(state).map(|(out, state)| {
+                    Box::new(Evaluated { pair: (ca, cb), bodies: (ba, bb), out, state })
                 }),
                 None,
                 film,
@@ -260,10 +257,14 @@ impl DiscreteContacts {
             if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film {
                 add(bodies, force_on_a, (torque_on_a, torque_on_b));
             }
-            let Some(Evaluated { pair, bodies, out, state }) = contact else { continue };
+            let Some(evaluated) = contact else { continue };
+            let Evaluated { pair, bodies, out, state } = *evaluated;
             alive.insert(pair, state);
             stats.evaluations += 1;
-            stats.full_evaluations += usize::from(out.full);
+            if let Some(why) = out.refresh {
+                stats.full_evaluations += 1;
+                stats.refreshes.count(why);
+            }
             stats.max_indentation = stats.max_indentation.max(out.geometry.indentation);
             let f = out.force;
             add(bodies, f.force_on_a, (f.torque_on_a, f.torque_on_b));

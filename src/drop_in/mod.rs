@@ -13,8 +13,9 @@ use hooks::Hooks;
 use super::boundary::{engine_real, engine_vector, pose, real, vector};
 use super::{boundary, engine};
 use engine::prelude::{
-    ActiveHooks, Collider, ColliderHandle, ContactModificationContext, EventHandler,
-    PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodyType, SolverFlags,
+    ActiveCollisionTypes, ActiveHooks, Collider, ColliderHandle, ContactModificationContext,
+    EventHandler, PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodyType,
+    SolverFlags,
 };
 use std::ops::Bound::{Excluded, Included};
 
@@ -110,8 +111,10 @@ struct Film {
 }
 
 /// What a pair's check on a sub-step found: a contact, the gap to remember when the pair is
-/// apart, and the film's force when lubrication is on and the pair is within its cut-off.
-type Checked = (Option<Evaluated>, Option<Gap>, Option<Film>);
+/// apart, and the film's force when lubrication is on and the pair is within its cut-off. The
+/// contact is boxed: most candidates have none, and every candidate's check is collected and
+/// read on one thread each sub-step.
+type Checked = (Option<Box<Evaluated>>, Option<Gap>, Option<Film>);
 
 /// How far any point of collider `h` may have moved between poses `from` and `to` (m): the
 /// translation plus the chord of the rotation at the farthest point, `2 r sin(θ/2) <= 2 r
@@ -177,6 +180,10 @@ pub struct DiscreteContacts {
     /// The neighbour search's memory; rebuilt from the bodies when empty (after a restart).
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     neighbours: std::sync::Mutex<Neighbours>,
+    /// The handled colliders' active collision types as the user set them, while a step has
+    /// them cleared in the world (see `set_aside_collision_types`); empty between steps.
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    set_aside: HashMap<ColliderHandle, ActiveCollisionTypes>,
 }
 
 /// The drop-in's tangential law unless set: the spring, so that a scene at rest stays at rest.
@@ -225,6 +232,7 @@ impl DiscreteContacts {
             lubrication: None,
             generation: 0,
             neighbours: Default::default(),
+            set_aside: HashMap::default(),
         })
     }
 
@@ -421,6 +429,12 @@ impl DiscreteContacts {
     }
 
     /// One step with the user's hooks and event handler.
+    ///
+    /// While the step runs rapier's pipeline, the handled colliders' active collision types
+    /// read empty in the world wherever that changes no pair with a collider that is not
+    /// handled (every such collider admits all the handled ones do, as with the default
+    /// types): rapier's broad phase then pairs no two handled colliders. Hooks and event
+    /// handlers called during the step see them so; the step gives them back before it returns.
     pub fn step_with_events(
         &mut self,
         world: &mut PhysicsWorld,
@@ -437,6 +451,7 @@ impl DiscreteContacts {
         world.integration_parameters.dt = engine_real(dt / substeps as Real);
         world.integration_parameters.num_solver_iterations = 1;
         let mut stats = StepStats { substeps, ..Default::default() };
+        self.set_aside_collision_types(world);
         let mut result = Ok(());
         for _ in 0..substeps {
             let applied = match self.apply_forces(world, hooks, &mut stats) {
@@ -451,6 +466,7 @@ impl DiscreteContacts {
         }
         world.integration_parameters.dt = saved.0;
         world.integration_parameters.num_solver_iterations = saved.1;
+        self.restore_collision_types(world);
         result?;
         self.wrap_bodies(world);
         stats.contacts = self.states.len();

@@ -92,6 +92,8 @@ pub struct Summary {
     pub substeps: usize,
     /// Contact evaluations in all, and of them full ones.
     pub evaluations: (usize, usize),
+    /// The full evaluations by why each was full.
+    pub refreshes: discrete_contact::contact::Refreshes,
     /// Wall time with the discrete contacts (s).
     pub wall: Real,
     /// The discrete run's report rows.

@@ -215,6 +215,7 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
     // and in all.
     let (mut full, mut contact_steps, mut all_full, mut all_evaluations) =
         (0usize, 0usize, 0usize, 0usize);
+    let mut refreshes = discrete_contact::contact::Refreshes::default();
     let mut rows = Vec::new();
     for s in 1..=steps {
         let st = contacts.step(&mut world)?;
@@ -225,6 +226,7 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
         contact_steps += st.contacts;
         all_full += st.full_evaluations;
         all_evaluations += st.evaluations;
+        refreshes += st.refreshes;
         if s % every == 0 {
             let (t, ke, wall) =
                 (s as f64 * dt, kinetic_energy(&world), start.elapsed().as_secs_f64());
@@ -251,6 +253,7 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
         max_indentation: max_ind,
         substeps: total_sub,
         evaluations: (all_evaluations, all_full),
+        refreshes,
         wall: start.elapsed().as_secs_f64(),
         rows,
     })
