@@ -72,12 +72,17 @@ pub struct StepStats {
     /// Contact evaluations during the step (one per live contact per sub-step).
     pub evaluations: usize,
     /// Of these, the ones integrated in full (the rest updated their last full geometry, see
-    /// `DiscreteContacts::with_geometry_reuse`).
-    pub full_evaluations: usize,
-    /// The full evaluations counted by why each was full.
+    /// `DiscreteContacts::with_geometry_reuse`), counted by why each was full.
     pub refreshes: crate::contact::Refreshes,
     /// Times the bounding-sphere neighbour list was rebuilt during the step (usually 0: it
     /// lasts until some body may have moved half its skin, a tenth of the smallest bounding
     /// radius).
     pub neighbour_builds: usize,
+}
+
+impl StepStats {
+    /// The evaluations integrated in full, for whatever reason ([`refreshes`](Self::refreshes)).
+    pub fn full_evaluations(&self) -> usize {
+        self.refreshes.total()
+    }
 }

@@ -191,7 +191,7 @@ fn a_spinning_ball_stays_put_with_geometry_reuse() {
     let (mut full, mut all) = (0, 0);
     for _ in 0..2000 {
         let s = contacts.step(&mut world).unwrap();
-        (full, all) = (full + s.full_evaluations, all + s.evaluations);
+        (full, all) = (full + s.full_evaluations(), all + s.evaluations);
     }
     let p = world.bodies[ball].translation();
     let sideways = p.x.hypot(p.z);
@@ -299,7 +299,7 @@ fn dropped_on_a_floor(
     for step in 0..360 {
         let s = contacts.step(&mut world).unwrap();
         if step >= 240 {
-            late_full += s.full_evaluations;
+            late_full += s.full_evaluations();
         }
     }
     (world, handles, late_full)

@@ -262,7 +262,6 @@ impl DiscreteContacts {
             alive.insert(pair, state);
             stats.evaluations += 1;
             if let Some(why) = out.refresh {
-                stats.full_evaluations += 1;
                 stats.refreshes.count(why);
             }
             stats.max_indentation = stats.max_indentation.max(out.geometry.indentation);

@@ -211,10 +211,9 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
     );
     let start = Instant::now();
     let (mut max_ind, mut max_sub, mut total_sub): (f64, usize, usize) = (0.0, 0, 0);
-    // Full evaluations and contact-steps (a contact alive at a step's end) since the last row,
-    // and in all.
-    let (mut full, mut contact_steps, mut all_full, mut all_evaluations) =
-        (0usize, 0usize, 0usize, 0usize);
+    // Full evaluations and contact-steps (a contact alive at a step's end) since the last row;
+    // evaluations, and full ones by cause, in all.
+    let (mut full, mut contact_steps, mut all_evaluations) = (0usize, 0usize, 0usize);
     let mut refreshes = discrete_contact::contact::Refreshes::default();
     let mut rows = Vec::new();
     for s in 1..=steps {
@@ -222,9 +221,8 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
         max_ind = max_ind.max(st.max_indentation);
         max_sub = max_sub.max(st.substeps);
         total_sub += st.substeps;
-        full += st.full_evaluations;
+        full += st.full_evaluations();
         contact_steps += st.contacts;
-        all_full += st.full_evaluations;
         all_evaluations += st.evaluations;
         refreshes += st.refreshes;
         if s % every == 0 {
@@ -252,7 +250,7 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
         ke: kinetic_energy(&world),
         max_indentation: max_ind,
         substeps: total_sub,
-        evaluations: (all_evaluations, all_full),
+        evaluations: (all_evaluations, refreshes.total()),
         refreshes,
         wall: start.elapsed().as_secs_f64(),
         rows,
