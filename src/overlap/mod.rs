@@ -510,14 +510,30 @@ impl Grid {
 /// and B facets (out of B) and their areas: `n_B − n_A`, each part weighted with the *other*
 /// part's area, so the smaller, better-resolved part counts most (see [`subcell`]); equal parts
 /// give the plain mean, and swapping the bodies negates it. Zero without facets.
+///
+/// Where one body's facets all lie in one plane (a flat face, within [`FLAT_FACETS`]) and the
+/// other's do not, the normal is that face's alone: the overlap's surface is closed, so the
+/// other part's area vector is exactly minus the face's, and only the discretisation's gaps
+/// (between cells integrated differently) would tilt it — by a few millionths, enough to push
+/// a cylinder lying on a floor sideways and roll it away.
 fn blended_normal(area_vectors: [Vector; 2], areas: [Real; 2]) -> Vector {
     let total = areas[0] + areas[1];
-    if total > 0.0 {
-        (area_vectors[1] * areas[0] - area_vectors[0] * areas[1]) * (2.0 / total)
-    } else {
-        Vector::ZERO
+    if !(total > 0.0) {
+        return Vector::ZERO;
+    }
+    let flat =
+        |s: usize| areas[s] > 0.0 && area_vectors[s].length() >= (1.0 - FLAT_FACETS) * areas[s];
+    match (flat(0), flat(1)) {
+        (false, true) => area_vectors[1] * (2.0 * areas[0] / total),
+        (true, false) => -area_vectors[0] * (2.0 * areas[1] / total),
+        _ => (area_vectors[1] * areas[0] - area_vectors[0] * areas[1]) * (2.0 / total),
     }
 }
+
+/// `1 − |Σ a| / Σ |a|` over a body's facet area vectors `a` below which they lie in one plane
+/// ([`blended_normal`]): round-off of a face's crossings, far below a curved surface's spread
+/// of normals over any overlap the grid resolves.
+const FLAT_FACETS: Real = 1e-9;
 
 /// What an exact form (closed-form spheres, clipped polyhedra) says of a pair.
 // Returned by value once per evaluation and unpacked at once: boxing the large variant would
@@ -875,10 +891,19 @@ fn first_touch<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         .or_else(|| finish(pair, integral, &grid, rough, pieces))
 }
 
-/// A persistent sub-cell contact without a box search: last sub-step's box of the overlap's
-/// pieces, padded by one cell on every side, is integrated at the same spacing (`N_c + 2`
-/// cells), and the new pieces' box is next sub-step's. `None` when the overlap has reached
-/// the padding's outer node layer (it moved by more than a cell): then the search runs.
+/// A persistent sub-cell contact without a box search, on the grid a first touch builds from
+/// the box of its pieces: last sub-step's box of the overlap's pieces a quarter cell larger on
+/// every side, `N_c` cells across. Where the overlap reaches that grid's boundary
+/// ([`meets_boundary`]), the box padded by one cell on every side at its own spacing (`N_c + 2`
+/// cells); `None` when the overlap reaches the padding's outer node layer too (it moved by more
+/// than a cell): then the search runs. The new pieces' box is next sub-step's.
+///
+/// The overlap of two convex bodies is convex, so connected: a part of it beyond the box joins
+/// the part inside across the box's boundary. Between most sub-steps an overlap moves and grows
+/// by far less than a quarter cell, and then the padding's cells — most of a padded grid's,
+/// each costly where an edge or a curved side passes it by — are not integrated at all. The
+/// pieces' box of the first grid is not the test: where a body's tangent plane holds a smooth
+/// side within a cell, the pieces reach the cell's faces although the overlap does not.
 fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     previous: &Aabb,
@@ -886,23 +911,70 @@ fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     n: usize,
 ) -> Option<OverlapGeometry> {
     let inner = Grid::on(&intersect(previous, rough)?, n)?;
-    let grid = inner.padded();
+    let (b, pad) = (inner.bounds(), inner.h * 0.25);
+    let snug = Grid::on(&Aabb::new(b.mins - pad, b.maxs + pad), n)?;
+    within(pair, &snug, rough, meets_boundary).or_else(|| {
+        within(pair, &inner.padded(), rough, |grid, values| {
+            boundary_nodes(grid).any(|(node, _)| in_both(values[node]))
+        })
+    })
+}
+
+/// The overlap on `grid`, or `None` where it `reaches` the grid's boundary (as the nodes'
+/// distances tell) or holds no piece.
+fn within<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    grid: &Grid,
+    rough: &Aabb,
+    reaches: impl FnOnce(&Grid, &[(Real, Real)]) -> bool,
+) -> Option<OverlapGeometry> {
     let values = grid.sample(pair, IntegrationMode::Subcell);
-    let m = n + 3;
-    let on_boundary = |i: usize| i == 0 || i == m - 1;
-    for k in 0..m {
-        for j in 0..m {
-            for i in 0..m {
-                let (a, b) = values[grid.index(i, j, k)];
-                if (on_boundary(i) || on_boundary(j) || on_boundary(k)) && a.max(b) <= 0.0 {
-                    return None;
-                }
-            }
-        }
+    if reaches(grid, &values) {
+        return None;
     }
-    let integral = subcell::integrate(pair, &grid, &values);
+    let integral = subcell::integrate(pair, grid, &values);
     let pieces = integral.bounds?;
-    finish(pair, integral, &inner, rough, pieces)
+    finish(pair, integral, grid, rough, pieces)
+}
+
+/// Whether the overlap reaches the grid's boundary, as its nodes' distances (`values`) tell: a
+/// node on the boundary lies in both bodies, or on an edge of the grid in the boundary with
+/// one end in A and the other in B the parts of the edge inside each meet (by linear
+/// interpolation).
+fn meets_boundary(grid: &Grid, values: &[(Real, Real)]) -> bool {
+    // Where a body's part of an edge ends, as a fraction of the edge from its end `d0`.
+    let cross = |d0: Real, d1: Real| d0 / (d0 - d1);
+    let meet = |(a0, b0): (Real, Real), (a1, b1): (Real, Real)| {
+        (a0 <= 0.0 && b1 <= 0.0 && a1 > 0.0 && b0 > 0.0 && cross(b0, b1) <= cross(a0, a1))
+            || (a1 <= 0.0 && b0 <= 0.0 && a0 > 0.0 && b1 > 0.0 && cross(a0, a1) <= cross(b0, b1))
+    };
+    let m = grid.n + 1;
+    let steps = [1, m, m * m];
+    boundary_nodes(grid).any(|(node, (idx, on))| {
+        in_both(values[node])
+            || (0..3).any(|axis| {
+                // An edge lies in the boundary where another of its coordinates is on it.
+                idx[axis] + 1 < m
+                    && (0..3).any(|o| o != axis && on[o])
+                    && meet(values[node], values[node + steps[axis]])
+            })
+    })
+}
+
+/// Whether a node with distances `(d_A, d_B)` lies in both bodies.
+fn in_both((a, b): (Real, Real)) -> bool {
+    a.max(b) <= 0.0
+}
+
+/// The grid's nodes on its boundary: each node's index in the grid's values, its `(i, j, k)`
+/// and whether each coordinate lies on the boundary.
+fn boundary_nodes(grid: &Grid) -> impl Iterator<Item = (usize, ([usize; 3], [bool; 3]))> + '_ {
+    let m = grid.n + 1;
+    let on = move |i: usize| i == 0 || i == m - 1;
+    (0..m)
+        .flat_map(move |k| (0..m).flat_map(move |j| (0..m).map(move |i| [i, j, k])))
+        .filter(move |idx| idx.iter().any(|&i| on(i)))
+        .map(move |idx| (grid.index(idx[0], idx[1], idx[2]), (idx, idx.map(on))))
 }
 
 /// Normal, indentation and the output from an integral; `None` when it found no overlap.
