@@ -53,7 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ke,
         max_indentation,
         substeps,
-        evaluations: (evaluations, full),
+        evaluations,
         refreshes,
         wall,
         rows,
@@ -71,6 +71,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         max_indentation * 1e3,
         100.0 * max_indentation / BODY_RADIUS
     );
+    let full = refreshes.total();
     println!(
         "  contact evaluations: {evaluations}, of them full {full} ({:.1} %)",
         100.0 * full as f64 / evaluations.max(1) as f64

@@ -647,6 +647,20 @@ fn full_and_reused(e_mod: f64, nu: f64, n: usize) -> (ContactModel, ContactModel
     (full, full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap())
 }
 
+/// A 1 cm cube on a plank 20 cm long at rest at the origin (its top face at y = 5 mm): the
+/// cube, the plank, and the cube's pose 20 µm deep in the plank at `x` along it, sunk `sink`
+/// further and turned by `turn` about z.
+fn cube_on_a_plank() -> (ConvexShape, ConvexShape, impl Fn(f64, f64, f64) -> Pose) {
+    let r = 0.005;
+    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
+    let plank = ConvexShape::cuboid(Vector::new(0.1, 0.005, 0.02)).unwrap();
+    let at = move |x: f64, sink: f64, turn: f64| {
+        let centre = Vector::new(x, 0.005 + r - 2e-5 - sink, 0.0);
+        Pose::from_parts(centre, Rotation::from_rotation_z(turn))
+    };
+    (cube, plank, at)
+}
+
 /// Geometry reuse measures the approach where the bodies meet, not along the line of their
 /// centres: a cube resting near the end of a long plank (the line of the centres nearly along
 /// the plank) pressed 3 µm further in is updated as a full evaluation gives it, and slid along
@@ -654,15 +668,9 @@ fn full_and_reused(e_mod: f64, nu: f64, n: usize) -> (ContactModel, ContactModel
 #[test]
 fn geometry_reuse_takes_the_approach_at_the_contact_on_a_long_body() {
     let (full, reuse) = full_and_reused(5e8, 0.35, 6);
-    let r = 0.005;
-    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
-    let plank = ConvexShape::cuboid(Vector::new(0.1, 0.005, 0.02)).unwrap();
+    let (cube, plank, cube_at) = cube_on_a_plank();
     let b = BodyState::at_rest(&plank, Pose::IDENTITY);
-    let depth = 2e-5;
-    let at = |x: f64, sink: f64| {
-        let centre = Vector::new(x, 0.005 + r - depth - sink, 0.0);
-        BodyState::at_rest(&cube, Pose::from_parts(centre, Rotation::IDENTITY))
-    };
+    let at = |x: f64, sink: f64| BodyState::at_rest(&cube, cube_at(x, sink, 0.0));
     let evaluate =
         |m: &ContactModel, a: &BodyState<ConvexShape>, state: &mut Option<ContactState>| {
             m.evaluate(a, &b, state).unwrap().expect("overlap")
@@ -707,14 +715,9 @@ fn geometry_reuse_takes_the_approach_at_the_contact_on_a_long_body() {
 fn a_full_evaluation_says_why_it_was_full() {
     use discrete_contact::contact::Refresh;
     let (full, reuse) = full_and_reused(5e8, 0.35, 6);
-    let r = 0.005;
-    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
-    let plank = ConvexShape::cuboid(Vector::new(0.1, 0.005, 0.02)).unwrap();
+    let (cube, plank, cube_at) = cube_on_a_plank();
     let b = BodyState::at_rest(&plank, Pose::IDENTITY);
-    let at = |x: f64, sink: f64, turn: f64| {
-        let centre = Vector::new(x, 0.005 + r - 2e-5 - sink, 0.0);
-        BodyState::at_rest(&cube, Pose::from_parts(centre, Rotation::from_rotation_z(turn)))
-    };
+    let at = |x: f64, sink: f64, turn: f64| BodyState::at_rest(&cube, cube_at(x, sink, turn));
     let why = |m: &ContactModel, moved: BodyState<ConvexShape>| {
         let mut state = None;
         let first = m.evaluate(&at(0.0, 0.0, 0.0), &b, &mut state).unwrap().expect("overlap");

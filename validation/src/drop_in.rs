@@ -90,9 +90,9 @@ pub struct Summary {
     pub max_indentation: Real,
     /// Sub-steps in all.
     pub substeps: usize,
-    /// Contact evaluations in all, and of them full ones.
-    pub evaluations: (usize, usize),
-    /// The full evaluations by why each was full.
+    /// Contact evaluations in all.
+    pub evaluations: usize,
+    /// The full evaluations among them, by why each was full (`refreshes.total()` in all).
     pub refreshes: discrete_contact::contact::Refreshes,
     /// Wall time with the discrete contacts (s).
     pub wall: Real,

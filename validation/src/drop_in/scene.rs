@@ -250,7 +250,7 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
         ke: kinetic_energy(&world),
         max_indentation: max_ind,
         substeps: total_sub,
-        evaluations: (all_evaluations, refreshes.total()),
+        evaluations: all_evaluations,
         refreshes,
         wall: start.elapsed().as_secs_f64(),
         rows,
