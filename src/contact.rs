@@ -17,8 +17,10 @@
 //! the bodies' centres (a body flat at the contact — a face under a ball or a cylinder's side —
 //! as a half-space: the point goes with the curved body) and across the contact plane as a tilt
 //! of the surfaces moves the overlap's centroid (by the overlap's footprint,
-//! [`OverlapGeometry::footprint`]), the normal as the surfaces' own normals at the contact point
-//! turn. First touch, a contact whose update would part the bodies, and any motion beyond the
+//! [`OverlapGeometry::footprint`], between nearly parallel surfaces; elsewhere — an edge or a
+//! corner in the overlap, surfaces at an angle — volume and centroid move as A's motion sweeps
+//! its surface through B, [`OverlapGeometry::flux`]), the normal as the surfaces' own normals at
+//! the contact point turn. First touch, a contact whose update would part the bodies, and any motion beyond the
 //! bound get a full evaluation. The rule reads only the contact's state, so results do not
 //! depend on the thread count and a checkpoint resumes bit-identically.
 
@@ -28,7 +30,9 @@ use crate::error::Result;
 use crate::force::{contact_force_with_history, BodyKinematics, ContactForce};
 use crate::material::PairParameters;
 use crate::math::{Pose, Real, Rotation, Vector};
-use crate::overlap::{compute_overlap, lens_measures, Footprint, OverlapGeometry, OverlapSettings};
+use crate::overlap::{
+    compute_overlap, lens_measures, Flux, Footprint, OverlapGeometry, OverlapSettings,
+};
 use crate::shape::Sdf;
 use crate::tangential::TangentialHistory;
 
@@ -130,6 +134,11 @@ pub struct Reference {
     /// evaluation gave one: how an update moves the centroid when the surfaces tilt.
     #[cfg_attr(feature = "checkpoint", serde(default))]
     pub footprint: Option<Footprint>,
+    /// A's flux (B's frame; see [`OverlapGeometry::flux`]), where the evaluation gave one: how
+    /// an update moves the volume and the centroid when the footprint does not apply (an edge
+    /// or a corner in the overlap, surfaces at an angle).
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    pub flux: Option<Flux>,
 }
 
 /// A ball's overlap with a ball or a flat body (a lens or a cap), as [`Reference`] keeps it.
@@ -194,7 +203,11 @@ impl Reference {
         // spinning about its centre), weighted by `TILT_WEIGHT`. The contact travels across the
         // grid by the shift plus the roll.
         let (turned, contact_point, gradients) = self.turn(shapes, relative, &motion);
-        let (tilted, weight) = match self.tilted(turned, approach) {
+        let followed = self.tilted(turned, approach).or_else(|| {
+            let turn = if ball_a { Vector::ZERO } else { motion.rotation.to_scaled_axis() };
+            self.swept(shift, turn, contact_point)
+        });
+        let (tilted, weight) = match followed {
             Some(t) => (t, TILT_WEIGHT),
             None => (Tilt { volume: 0.0, shift: Vector::ZERO }, FROZEN_TILT),
         };
@@ -246,6 +259,7 @@ impl Reference {
             surface_area,
             corrected_box,
             footprint: self.footprint.map(|f| f.transformed(pose_b)),
+            flux: self.flux.map(|f| f.transformed(pose_b)),
         })
     }
 
@@ -315,6 +329,23 @@ impl Reference {
         let s1 = offset * f.area;
         let j_t = f.spread * t + offset * (f.area * offset.dot(t));
         Some(Tilt { volume: -t.dot(s1), shift: self.in_plane(s1 * approach - j_t) / self.volume })
+    }
+
+    /// The first-order effect of A's motion on an overlap the footprint does not cover (an edge
+    /// or a corner in it, surfaces at an angle; `None` without a flux), by Reynolds' transport
+    /// over A's surface within B ([`Flux`]): A moves by `shift` at the contact point (a ball by
+    /// its centre's move, its own turning moves no surface) and turns by `turn` (rad). The
+    /// volume's change beyond the approach's, which the volume law follows, and the centroid's
+    /// move as the shift from `moved`, the contact point as
+    /// [`moved_contact_point`](Self::moved_contact_point) moves it.
+    fn swept(&self, shift: Vector, turn: Vector, moved: Vector) -> Option<Tilt> {
+        let f = self.flux?;
+        let (volume, moment) = f.swept(shift + turn.cross(f.origin - self.contact_point), turn);
+        let approach = shift.dot(self.normal) * self.normal.dot(f.area);
+        Some(Tilt {
+            volume: volume - approach,
+            shift: self.contact_point + moment / self.volume - moved,
+        })
     }
 
     /// How far the bodies' summed distance gradients turned at the contact point under A's
@@ -532,16 +563,17 @@ const LENS_ALLOWANCE: Real = 16.0;
 /// frame transform).
 const FLAT: Real = 1e-9;
 
-/// How much more a tilt counts than an approach against the normal allowance between nearly
-/// parallel surfaces. An update moves the centroid and the volume as a tilt does to first
-/// order ([`Reference::tilted`]: the restoring torque of a rocking body follows the rocking),
+/// How much more a tilt counts than an approach against the normal allowance where an update
+/// follows it. An update moves the centroid and the volume as a tilt does to first order
+/// (by the footprint between nearly parallel surfaces, [`Reference::tilted`], else by A's
+/// flux, [`Reference::swept`]: the restoring torque of a rocking body follows the rocking),
 /// not what grows with the tilt's square; where a full evaluation corrects the force by a
 /// jump, a body at rest on a slope is nudged at every one.
 const TILT_WEIGHT: Real = 2.0;
 
-/// [`TILT_WEIGHT`] where an update cannot follow the tilt ([`Reference::tilted`] gives
-/// `None`): the centroid stays, so the restoring torque lags the rocking unless the tilt is
-/// held smaller.
+/// [`TILT_WEIGHT`] where an update cannot follow the tilt (an overlap with neither a footprint
+/// nor a flux: counting): the centroid stays, so the restoring torque lags the rocking unless
+/// the tilt is held smaller.
 const FROZEN_TILT: Real = 8.0;
 
 /// Largest angle (rad, as the in-plane part of the summed gradients) between two surfaces
@@ -918,6 +950,7 @@ impl ContactModel {
             lever: r_a.min(r_b).max(reach),
             cell: sides.max_element() / self.settings.n_c() as Real,
             footprint: g.footprint.map(|f| f.transformed(&b.pose.inverse())),
+            flux: g.flux.map(|f| f.transformed(&b.pose.inverse())),
         }
     }
 }

@@ -125,6 +125,7 @@ fn lens(ca: Vector, a: Real, cb: Vector, b: Real, pose_b: &Pose) -> Exact {
         surface_area: 2.0 * PI * (a * ha + b * hb),
         corrected_box: sphere_box(contact_point, a.min(b), pose_b),
         footprint: None,
+        flux: None,
     };
     decided(volume, geometry)
 }
@@ -157,6 +158,7 @@ fn cap_on_plane(
         surface_area,
         corrected_box: sphere_box(contact_point, r, pose_b),
         footprint: None,
+        flux: None,
     };
     decided(volume, geometry)
 }

@@ -87,6 +87,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         volume,
         centroid,
         footprint: footprint.finish(),
+        flux: None,
         normal,
         surface_area: area,
         bounds: None,

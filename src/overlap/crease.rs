@@ -326,14 +326,15 @@ fn clip_planes(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
 }
 
 /// The box `lo`–`hi` clipped by `scratch.planes` (a whole overlap of two polyhedra bounded by
-/// their faces, deepest first): its integrals and the footprint of the bodies' faces (half of
-/// each, see [`footprint`](super::footprint)); `None` when a face of the box is left (the box
-/// did not hold the overlap) or the polyhedron would outgrow the buffers.
+/// their faces, deepest first): its integrals, the footprint of the bodies' faces (half of
+/// each, see [`footprint`](super::footprint)) and A's faces' flux ([`flux`](super::flux));
+/// `None` when a face of the box is left (the box did not hold the overlap) or the
+/// polyhedron would outgrow the buffers.
 pub(super) fn clip_box(
     lo: Vector,
     hi: Vector,
     scratch: &mut Scratch,
-) -> Option<(Clipped, super::footprint::Sums)> {
+) -> Option<(Clipped, super::footprint::Sums, super::flux::Sums)> {
     // No two-plane exclusion test first (as for a cell): it costs a pass over all pairs of
     // the bodies' faces, and the box holds the whole overlap, so it rarely excludes.
     scratch.tol = tolerance(lo, hi);
@@ -342,14 +343,19 @@ pub(super) fn clip_box(
     let clipped = clip_deepest_first(lo, hi, scratch)?;
     let poly = &scratch.polys[scratch.current];
     let mut footprint = super::footprint::Sums::default();
+    let mut flux = super::flux::Sums::about((lo + hi) * 0.5);
     for f in poly.faces() {
-        f.body?;
+        let body = f.body?;
         let p = |i: usize| poly.verts[poly.index[f.start + i] as usize];
         for i in 2..f.len {
-            footprint.add_triangle([p(0), p(i - 1), p(i)], 0.5);
+            let triangle = [p(0), p(i - 1), p(i)];
+            footprint.add_triangle(triangle, 0.5);
+            if body == 0 {
+                flux.add_triangle(triangle);
+            }
         }
     }
-    Some((clipped, footprint))
+    Some((clipped, footprint, flux))
 }
 
 /// Volume, first moment, per-body facet area vectors and areas, and the box of `poly`.

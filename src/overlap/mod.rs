@@ -35,9 +35,11 @@ mod closed_form;
 mod correction;
 mod count;
 mod crease;
+mod flux;
 mod footprint;
 mod polyhedra;
 pub(crate) use closed_form::lens_measures;
+pub use flux::Flux;
 pub use footprint::Footprint;
 mod subcell;
 
@@ -195,6 +197,10 @@ pub struct OverlapGeometry {
     /// and second moment of area — how the overlap changes when the surfaces tilt against
     /// each other. From the grid; `None` from the closed-form spheres and the exact polyhedra.
     pub footprint: Option<Footprint>,
+    /// How the overlap changes to first order when A moves against B (world frame; see
+    /// [`Flux`]): the moments of A's surface within B. From the sub-cell grid; `None` from
+    /// counting and the exact forms.
+    pub flux: Option<Flux>,
 }
 
 /// A body's SDF placed in the pair's frame (A's or B's body frame): `d(x) = sdf(R^T (x - t)) - ε`.
@@ -557,6 +563,8 @@ pub(crate) struct Integral {
     surface_area: Real,
     /// The footprint (pair frame).
     footprint: Option<Footprint>,
+    /// A's flux (pair frame).
+    flux: Option<Flux>,
     /// Box of the integrated pieces (sub-cell mode; `None` for counting).
     bounds: Option<Aabb>,
 }
@@ -660,6 +668,7 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         contact_point: frame.transform_point(g.contact_point),
         normal: frame.rotation * g.normal,
         footprint: g.footprint.map(|f| f.transformed(&frame)),
+        flux: g.flux.map(|f| f.transformed(&frame)),
         ..g
     };
     // Two polyhedra without enlargement: the grid's cells would be clipped by their faces,
@@ -1007,6 +1016,7 @@ fn finish<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         surface_area: integral.surface_area,
         corrected_box,
         footprint: integral.footprint,
+        flux: integral.flux,
     })
 }
 

@@ -85,7 +85,7 @@ fn clip_and_measure(scratch: &mut crease::Scratch, rough: &Aabb, size: Real, pad
         }
         pad = 4.0 * pad + size;
     }
-    let Some((c, footprint)) = clipped else { return Exact::Uncovered };
+    let Some((c, footprint, flux)) = clipped else { return Exact::Uncovered };
     if c.volume.is_nan() {
         return Exact::Uncovered;
     }
@@ -119,6 +119,7 @@ fn clip_and_measure(scratch: &mut crease::Scratch, rough: &Aabb, size: Real, pad
         surface_area: c.area[0] + c.area[1],
         corrected_box: Aabb::new(c.lo, c.hi),
         footprint: footprint.finish(),
+        flux: flux.finish(centroid),
     })
 }
 

@@ -42,8 +42,8 @@
 use parry3d_f64::bounding_volume::Aabb;
 
 use super::crease::{self, Plane};
-use super::footprint;
 use super::{blended_normal, crossing, Grid, Integral, Pair};
+use super::{flux, footprint};
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
 
@@ -265,6 +265,8 @@ struct Sums {
     volume: Real,
     moment: Vector,
     footprint: footprint::Sums,
+    /// A's facets' moments ([`flux`]).
+    flux: flux::Sums,
     /// Area vectors of A's facets (oriented out of A) and of B's (out of B) and their areas.
     normal: [Vector; 2],
     area: [Real; 2],
@@ -587,6 +589,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         volume: 0.0,
         moment: Vector::ZERO,
         footprint: footprint::Sums::default(),
+        flux: flux::Sums::about(grid.bounds().center()),
         normal: [Vector::ZERO; 2],
         area: [0.0; 2],
         lo: inf,
@@ -681,10 +684,11 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                         key: Vert::node_key(node as u32),
                     }
                 });
-                let (volume, moment, area) = (
+                let (volume, moment, area, normal_a) = (
                     cutter.sums.volume,
                     cutter.sums.moment,
                     cutter.sums.area[0] + cutter.sums.area[1],
+                    cutter.sums.normal[0],
                 );
                 // Every surface that may pass through the cell is a polyhedron's: the cell
                 // clipped by their faces is the overlap in it, exactly.
@@ -695,9 +699,10 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     cutter.memo_len = 0;
                     cutter.cell(&corners, h, [in_a, in_b]);
                 }
-                // The footprint cell by cell: the cell's facets at the centroid of its part of
-                // the overlap, or at its centre where it holds a facet alone (a body's face on
-                // a node layer goes to the cell on the body's side, which may hold no volume).
+                // The footprint and A's flux cell by cell: the cell's facets at the centroid of
+                // its part of the overlap, or at its centre where it holds a facet alone (a
+                // body's face on a node layer goes to the cell on the body's side, which may
+                // hold no volume).
                 let it = &mut cutter.sums;
                 let part = it.volume - volume;
                 let facets = 0.5 * (it.area[0] + it.area[1] - area);
@@ -705,6 +710,10 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                     let at =
                         if part > 0.0 { (it.moment - moment) / part } else { origin + h * 0.5 };
                     it.footprint.add(at, h, facets);
+                    let a = it.normal[0] - normal_a;
+                    if a != Vector::ZERO {
+                        it.flux.add(at, a);
+                    }
                 }
             }
         }
@@ -717,6 +726,7 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         volume: it.volume,
         centroid,
         footprint: it.footprint.finish(),
+        flux: it.flux.finish(centroid),
         // B's outward normal points from B to A, A's from A to B: both B→A as `n_B − n_A`.
         normal: blended_normal(it.normal, it.area),
         surface_area: it.area[0] + it.area[1],
