@@ -211,12 +211,19 @@ impl Reference {
             Some(t) => (t, TILT_WEIGHT),
             None => (Tilt { volume: 0.0, shift: Vector::ZERO }, FROZEN_TILT),
         };
-        let tilt = weight * turned.length() * self.reach;
+        // A ball has no orientation: against one, the overlap is a function of the ball's
+        // centre in the other body's frame alone, which the approach and the travel bound, and
+        // the normal and the contact point are the other body's gradient at that centre
+        // (`through_ball_centres`, after every update), so no tilt counts. (The gradient inside
+        // a body with edges jumps from face to face where the contact point crosses an edge's
+        // bisector, which would count as a tilt of the angle between the faces.)
+        let ball_b = shapes.1.sphere_radius().is_some();
+        let tilt = if ball_a || ball_b { 0.0 } else { weight * turned.length() * self.reach };
         // How far the contact travelled over the surfaces. A ball looks the same from every
         // side, so its own turning does not count: under a ball A the contact travels over B as
         // the moved contact point does, and between two balls the overlap is a lens of the
         // centres' distance alone, which the approach follows.
-        let travel = match (ball_a, shapes.1.sphere_radius().is_some()) {
+        let travel = match (ball_a, ball_b) {
             (true, true) => 0.0,
             (true, false) => self.in_plane(contact_point - self.contact_point).length(),
             _ => across + chord * self.lever,
@@ -760,9 +767,10 @@ impl ContactModel {
     /// - its local indentation changes by at most `fraction × d` — the approach at the
     ///   contact point (A's material there, along the normal) plus twice the tilt across the
     ///   overlap (how far the surfaces' normals at the contact point turned, times the
-    ///   corrected box's diagonal; eight times where the surfaces meet at an angle: an update
-    ///   follows a tilt only between nearly parallel surfaces, and only to first order); a
-    ///   lens or a cap, which an update follows by its exact law, by sixteen times that, and
+    ///   corrected box's diagonal: an update follows a tilt to first order only; eight times
+    ///   for a counted overlap, which it does not follow; none against a ball, which has no
+    ///   orientation); a lens or a cap, which an update follows by its exact law, by sixteen
+    ///   times that, and
     /// - A's material point at the contact travels across the grid by at most
     ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
     ///   the roll's chord at the nearer body's bounding-sphere centre.

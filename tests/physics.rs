@@ -688,6 +688,55 @@ fn geometry_reuse_follows_a_tilt_on_an_edge() {
     }
 }
 
+/// A ball pressed 20 µm onto a cube's edge, then moved across the edge by up to 3 µm: the
+/// contact point crosses the edge's bisector, where the gradient inside the cube jumps from one
+/// face's normal to the other's. A ball has no orientation, so the overlap depends on its
+/// centre alone, which the approach and the travel bound: the move is an update, and its
+/// force is within 0.1 % of a full evaluation's, its normal within 1e-3 rad.
+#[test]
+fn geometry_reuse_moves_a_ball_across_an_edge() {
+    let mat = Material::new(5e8, 0.35).unwrap();
+    let full = ContactModel::new(
+        PairParameters::new(&mat, &mat, 0.8).unwrap(),
+        settings(6, IntegrationMode::Subcell),
+    );
+    let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
+    let (r, radius) = (0.005, 0.004);
+    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
+    let ball = ConvexShape::ball(radius).unwrap();
+    let edge = BodyState::at_rest(
+        &cube,
+        Pose::from_parts(Vector::ZERO, Rotation::from_rotation_z(std::f64::consts::FRAC_PI_4)),
+    );
+    let top = r * std::f64::consts::SQRT_2;
+    let at = |x: f64| {
+        BodyState::at_rest(&ball, Pose::from_translation(Vector::new(x, top + radius - 2e-5, 0.0)))
+    };
+    let evaluate = |m: &ContactModel, x: f64, state: &mut Option<ContactState>| {
+        m.evaluate(&at(x), &edge, state).unwrap().expect("overlap")
+    };
+    for x in [1e-6, -2e-6, 3e-6] {
+        let mut state = None;
+        evaluate(&reuse, 0.0, &mut state);
+        let updated = evaluate(&reuse, x, &mut state);
+        let exact = evaluate(&full, x, &mut None);
+        assert!(
+            updated.refresh.is_none(),
+            "a move of {x} m across the edge: {:?}",
+            updated.refresh
+        );
+        let (f, f_exact) = (updated.force.force_on_a, exact.force.force_on_a);
+        let turn = updated.geometry.normal.angle_between(exact.geometry.normal);
+        println!(
+            "{x:+.0e} m: force {:.6e} N, full {:.6e} N; normals {turn:.2e} rad apart",
+            f.length(),
+            f_exact.length()
+        );
+        assert!((f - f_exact).length() <= 1e-3 * f_exact.length(), "force {f:?}, full {f_exact:?}");
+        assert!(turn <= 1e-3, "normals {turn:.2e} rad apart");
+    }
+}
+
 /// A sub-cell model at `N_c = n` for two bodies of Young's modulus `e_mod` and Poisson's
 /// ratio `nu` (restitution 0.8) evaluating every contact in full, and the same with the default
 /// geometry reuse.
