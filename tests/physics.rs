@@ -597,38 +597,12 @@ fn geometry_reuse_keeps_a_spinning_cubes_impact_as_full_evaluation_gives_it() {
 /// with a full evaluation's within 5 % of what the tilt changed.
 #[test]
 fn geometry_reuse_moves_the_contact_point_as_a_tilt_does() {
-    let mat = Material::new(5e8, 0.35).unwrap();
-    let settings = settings(6, IntegrationMode::Subcell);
-    let full = ContactModel::new(PairParameters::new(&mat, &mat, 0.8).unwrap(), settings);
-    let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
-    let r = 0.005;
-    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
-    let floor = ConvexShape::half_space(Vector::Y).unwrap();
-    let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
-    let centre = Vector::new(0.0, r - 2e-5, 0.0);
-    let at = |angle: f64| {
-        let turn = Rotation::from_rotation_z(angle) * Rotation::from_rotation_x(0.4 * angle);
-        BodyState::at_rest(&cube, Pose::from_parts(centre, turn))
-    };
-    let evaluate = |m: &ContactModel, angle: f64, state: &mut Option<ContactState>| {
-        m.evaluate(&at(angle), &wall, state).unwrap().expect("overlap")
-    };
-    let torque = |o: &discrete_contact::contact::ContactOutput| {
-        (o.geometry.contact_point - centre).cross(o.force.force_on_a)
-    };
-    let level = evaluate(&full, 0.0, &mut None);
     for angle in [3e-5, -5e-5, 8e-5] {
-        let mut state = None;
-        evaluate(&reuse, 0.0, &mut state);
-        let updated = evaluate(&reuse, angle, &mut state);
-        let exact = evaluate(&full, angle, &mut None);
-        assert!(!updated.full(), "a tilt of {angle} rad within the allowance is an update");
-        let moved = (exact.geometry.contact_point - level.geometry.contact_point).length();
-        let off = (updated.geometry.contact_point - exact.geometry.contact_point).length();
-        let (t_exact, t_updated) = (torque(&exact), torque(&updated));
-        let turned = (t_exact - torque(&level)).length();
-        let t_off = (t_updated - t_exact).length();
+        let turn = Rotation::from_rotation_z(angle) * Rotation::from_rotation_x(0.4 * angle);
+        let t = Tilted::cube_on_the_floor(Rotation::IDENTITY, turn);
+        let (moved, off, turned, t_off) = t.errors();
         println!("{angle:+.0e} rad: centroid moved {moved:.3e} m, update off by {off:.3e} m; torque changed {turned:.3e} N m, update off by {t_off:.3e} N m");
+        assert!(!t.updated.full(), "a tilt of {angle} rad within the allowance is an update");
         assert!(moved > 1e-5, "the tilt must move the centroid ({moved:.3e} m)");
         assert!(off <= 0.05 * moved, "contact point off by {off:.3e} m of {moved:.3e} m");
         assert!(t_off <= 0.05 * turned, "torque off by {t_off:.3e} of {turned:.3e} N m");
@@ -645,46 +619,74 @@ fn geometry_reuse_moves_the_contact_point_as_a_tilt_does() {
 /// measures it, where a wedge's depth through its centroid grows as 2/3 of its deepest.
 #[test]
 fn geometry_reuse_follows_a_tilt_on_an_edge() {
-    let mat = Material::new(5e8, 0.35).unwrap();
-    let settings = settings(6, IntegrationMode::Subcell);
-    let full = ContactModel::new(PairParameters::new(&mat, &mat, 0.8).unwrap(), settings);
-    let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
-    let r = 0.005;
-    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
-    let floor = ConvexShape::half_space(Vector::Y).unwrap();
-    let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
-    let edge = Rotation::from_rotation_z(0.6);
-    // The lowest edge's depth below the cube's centre: the larger of the corners' heights.
-    let low = (edge * Vector::new(-r, -r, 0.0)).y.min((edge * Vector::new(r, -r, 0.0)).y);
-    let centre = Vector::new(0.0, -low - 2e-5, 0.0);
-    let at = |angle: f64| {
-        let turn = Rotation::from_rotation_x(angle) * Rotation::from_rotation_z(0.3 * angle);
-        BodyState::at_rest(&cube, Pose::from_parts(centre, turn * edge))
-    };
-    let evaluate = |m: &ContactModel, angle: f64, state: &mut Option<ContactState>| {
-        m.evaluate(&at(angle), &wall, state).unwrap().expect("overlap")
-    };
-    let torque = |o: &discrete_contact::contact::ContactOutput| {
-        (o.geometry.contact_point - centre).cross(o.force.force_on_a)
-    };
-    let level = evaluate(&full, 0.0, &mut None);
     for angle in [3e-5, -6e-5, 1e-4] {
-        let mut state = None;
-        evaluate(&reuse, 0.0, &mut state);
-        let updated = evaluate(&reuse, angle, &mut state);
-        let exact = evaluate(&full, angle, &mut None);
-        assert!(!updated.full(), "a tilt of {angle} rad within the allowance is an update");
-        let (v0, v1, v) = (level.geometry.volume, exact.geometry.volume, updated.geometry.volume);
-        let moved = (exact.geometry.contact_point - level.geometry.contact_point).length();
-        let off = (updated.geometry.contact_point - exact.geometry.contact_point).length();
-        let (t_exact, t_updated) = (torque(&exact), torque(&updated));
-        let turned = (t_exact - torque(&level)).length();
-        let t_off = (t_updated - t_exact).length();
+        let turn = Rotation::from_rotation_x(angle) * Rotation::from_rotation_z(0.3 * angle);
+        let t = Tilted::cube_on_the_floor(Rotation::from_rotation_z(0.6), turn);
+        let (moved, off, turned, t_off) = t.errors();
+        let [v0, v1, v] = [&t.level, &t.exact, &t.updated].map(|o| o.geometry.volume);
         println!("{angle:+.0e} rad: volume {v0:.4e} -> {v1:.4e} m³, update {v:.4e}; centroid moved {moved:.3e} m, update off by {off:.3e} m; torque changed {turned:.3e} N m, update off by {t_off:.3e} N m");
+        assert!(!t.updated.full(), "a tilt of {angle} rad within the allowance is an update");
         assert!(moved > 1e-5, "the tilt must move the centroid ({moved:.3e} m)");
         assert!((v - v1).abs() <= 0.25 * (v1 - v0).abs(), "volume {v:.4e}, full {v1:.4e}");
         assert!(off <= 0.05 * moved, "contact point off by {off:.3e} m of {moved:.3e} m");
         assert!(t_off <= 0.1 * turned, "torque off by {t_off:.3e} of {turned:.3e} N m");
+    }
+}
+
+/// A 1 cm cube (E = 500 MPa, sub-cell `N_c = 6`) at an orientation, its lowest corner 20 µm
+/// into the floor `y <= 0`, evaluated in full there (`level`); then turned about its centre,
+/// evaluated in full (`exact`) and updated from `level` with the default geometry reuse.
+struct Tilted {
+    centre: Vector,
+    level: discrete_contact::contact::ContactOutput,
+    exact: discrete_contact::contact::ContactOutput,
+    updated: discrete_contact::contact::ContactOutput,
+}
+
+impl Tilted {
+    fn cube_on_the_floor(base: Rotation, turn: Rotation) -> Self {
+        let mat = Material::new(5e8, 0.35).unwrap();
+        let settings = settings(6, IntegrationMode::Subcell);
+        let full = ContactModel::new(PairParameters::new(&mat, &mat, 0.8).unwrap(), settings);
+        let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
+        let r = 0.005;
+        let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
+        let floor = ConvexShape::half_space(Vector::Y).unwrap();
+        let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
+        let corner = |c: usize| {
+            let sign = |bit: usize| if c & bit == 0 { -r } else { r };
+            (base * Vector::new(sign(1), sign(2), sign(4))).y
+        };
+        let low = (0..8).map(corner).fold(Real::INFINITY, Real::min);
+        let centre = Vector::new(0.0, -low - 2e-5, 0.0);
+        let evaluate = |m: &ContactModel, turn: Rotation, state: &mut Option<ContactState>| {
+            let body = BodyState::at_rest(&cube, Pose::from_parts(centre, turn * base));
+            m.evaluate(&body, &wall, state).unwrap().expect("overlap")
+        };
+        let mut state = None;
+        evaluate(&reuse, Rotation::IDENTITY, &mut state);
+        Self {
+            centre,
+            level: evaluate(&full, Rotation::IDENTITY, &mut None),
+            exact: evaluate(&full, turn, &mut None),
+            updated: evaluate(&reuse, turn, &mut state),
+        }
+    }
+
+    /// How far the full evaluation's contact point moved with the turn and how far the
+    /// update's is from it (m); how much the torque about the centre changed and how far the
+    /// update's is from it (N m).
+    fn errors(&self) -> (Real, Real, Real, Real) {
+        let torque = |o: &discrete_contact::contact::ContactOutput| {
+            (o.geometry.contact_point - self.centre).cross(o.force.force_on_a)
+        };
+        let (exact, updated) = (&self.exact.geometry, &self.updated.geometry);
+        (
+            (exact.contact_point - self.level.geometry.contact_point).length(),
+            (updated.contact_point - exact.contact_point).length(),
+            (torque(&self.exact) - torque(&self.level)).length(),
+            (torque(&self.updated) - torque(&self.exact)).length(),
+        )
     }
 }
 
