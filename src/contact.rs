@@ -598,17 +598,22 @@ const MIN_LOG_INDENTATION_STEP: Real = 0.05;
 /// under the centroid, as for caps and punches; less for a tilted corner). Both are secants
 /// from the `previous` full evaluation of the same contact where the indentation
 /// changed enough between them, else the previous law; at first touch the overlap's shape
-/// measure [`volume_exponent`](crate::force::volume_exponent) and a rate of 1.
+/// measure [`volume_exponent`](crate::force::volume_exponent) and the rate that makes the
+/// law's first-order change A's flux's ([`OverlapGeometry::flux`]; 1 without one).
 fn volume_law(
     previous: Option<&Reference>,
     approach: impl FnOnce(&Reference) -> Real,
     g: &OverlapGeometry,
 ) -> (Real, Real) {
     let Some(r) = previous else {
-        return (
-            crate::force::volume_exponent(g.volume, g.indentation, g.surface_area).clamp(1.0, 3.0),
-            1.0,
-        );
+        let exponent =
+            crate::force::volume_exponent(g.volume, g.indentation, g.surface_area).clamp(1.0, 3.0);
+        // The law's first-order change under an approach, `p V rate / d`, is the area A's
+        // surface sweeps across the normal, `−n·S` (A's flux): 1 for a cap, 2/3 for a wedge,
+        // whose depth through the centroid is 2/3 of its deepest.
+        let rate =
+            g.flux.map_or(1.0, |f| -g.normal.dot(f.area) * g.indentation / (exponent * g.volume));
+        return (exponent, if rate.is_finite() { rate.clamp(0.05, 1.0) } else { 1.0 });
     };
     let step = (g.indentation / r.indentation).ln();
     let exponent = (g.volume / r.volume).ln() / step;

@@ -613,10 +613,10 @@ fn geometry_reuse_moves_the_contact_point_as_a_tilt_does() {
 /// turned by up to 0.1 mrad about axes across and along the edge: the edge dips at one end, so
 /// the centroid runs along it by tens of µm. The surfaces meet at an angle, so no footprint
 /// follows the tilt; the update follows it by A's flux (Reynolds' transport over the cube's
-/// faces within the floor): its contact point within 5 % of what the tilt changed and its
-/// torque about the cube's centre within 10 %. Its volume comes within 25 %: the approach's
-/// share follows the volume law, whose depth rate is 1 until a second full evaluation
-/// measures it, where a wedge's depth through its centroid grows as 2/3 of its deepest.
+/// faces within the floor): its contact point within 5 % of what the tilt changed, its
+/// torque about the cube's centre within 10 %, and its volume within 10 % (the approach's
+/// share follows the volume law, whose depth rate at first touch is the flux's: a wedge's
+/// depth through its centroid grows as 2/3 of its deepest).
 #[test]
 fn geometry_reuse_follows_a_tilt_on_an_edge() {
     for angle in [3e-5, -6e-5, 1e-4] {
@@ -627,7 +627,7 @@ fn geometry_reuse_follows_a_tilt_on_an_edge() {
         println!("{angle:+.0e} rad: volume {v0:.4e} -> {v1:.4e} m³, update {v:.4e}; centroid moved {moved:.3e} m, update off by {off:.3e} m; torque changed {turned:.3e} N m, update off by {t_off:.3e} N m");
         assert!(!t.updated.full(), "a tilt of {angle} rad within the allowance is an update");
         assert!(moved > 1e-5, "the tilt must move the centroid ({moved:.3e} m)");
-        assert!((v - v1).abs() <= 0.25 * (v1 - v0).abs(), "volume {v:.4e}, full {v1:.4e}");
+        assert!((v - v1).abs() <= 0.1 * (v1 - v0).abs(), "volume {v:.4e}, full {v1:.4e}");
         assert!(off <= 0.05 * moved, "contact point off by {off:.3e} m of {moved:.3e} m");
         assert!(t_off <= 0.1 * turned, "torque off by {t_off:.3e} of {turned:.3e} N m");
     }
