@@ -20,9 +20,9 @@
 //! [`OverlapGeometry::footprint`], between nearly parallel surfaces; elsewhere — an edge or a
 //! corner in the overlap, surfaces at an angle — volume and centroid move as A's motion sweeps
 //! its surface through B, [`OverlapGeometry::flux`]), the normal as the surfaces' own normals at
-//! the contact point turn. First touch, a contact whose update would part the bodies, and any motion beyond the
-//! bound get a full evaluation. The rule reads only the contact's state, so results do not
-//! depend on the thread count and a checkpoint resumes bit-identically.
+//! the contact point turn. First touch, a contact whose update would part the bodies, and any
+//! motion beyond the bound get a full evaluation. The rule reads only the contact's state, so
+//! results do not depend on the thread count and a checkpoint resumes bit-identically.
 
 use parry3d_f64::bounding_volume::Aabb;
 
