@@ -195,11 +195,12 @@ pub struct OverlapGeometry {
     pub corrected_box: Aabb,
     /// The overlap's footprint (world frame): the area where the surfaces meet, its centroid
     /// and second moment of area — how the overlap changes when the surfaces tilt against
-    /// each other. From the grid; `None` from the closed-form spheres and the exact polyhedra.
+    /// each other. From the grid and the clipped polyhedra; `None` from the closed-form
+    /// spheres.
     pub footprint: Option<Footprint>,
     /// How the overlap changes to first order when A moves against B (world frame; see
-    /// [`Flux`]): the moments of A's surface within B. From the sub-cell grid; `None` from
-    /// counting and the exact forms.
+    /// [`Flux`]): the moments of A's surface within B. From the sub-cell grid and the clipped
+    /// polyhedra; `None` from counting and the closed-form spheres.
     pub flux: Option<Flux>,
 }
 
