@@ -570,13 +570,15 @@ const LENS_ALLOWANCE: Real = 16.0;
 /// frame transform).
 const FLAT: Real = 1e-9;
 
-/// How much more a tilt counts than an approach against the normal allowance where an update
-/// follows it. An update moves the centroid and the volume as a tilt does to first order
-/// (by the footprint between nearly parallel surfaces, [`Reference::tilted`], else by A's
-/// flux, [`Reference::swept`]: the restoring torque of a rocking body follows the rocking),
-/// not what grows with the tilt's square; where a full evaluation corrects the force by a
-/// jump, a body at rest on a slope is nudged at every one.
-const TILT_WEIGHT: Real = 2.0;
+/// How much a tilt counts against the normal allowance, as the change of depth `|t| reach` it
+/// makes across the overlap, where an update follows it. An update moves the centroid and the
+/// volume as a tilt does to first order (by the footprint between nearly parallel surfaces,
+/// [`Reference::tilted`], else by A's flux, [`Reference::swept`]: the restoring torque of a
+/// rocking body follows the rocking), so what it misses grows with the tilt's square; this
+/// weight lets through the tilt at which an update misses as much of the force as the volume
+/// law does at the approach's own limit (a few per cent at the default reuse; the test
+/// `geometry_reuse_bounds_a_tilt_by_its_error` holds it to that).
+const TILT_WEIGHT: Real = 0.5;
 
 /// [`TILT_WEIGHT`] where an update cannot follow the tilt (an overlap with neither a footprint
 /// nor a flux: counting): the centroid stays, so the restoring torque lags the rocking unless
@@ -770,10 +772,11 @@ impl ContactModel {
     /// full evaluations a live contact's geometry is updated from the pair's relative motion
     /// (see the module docs) while
     /// - its local indentation changes by at most `fraction × d` — the approach at the
-    ///   contact point (A's material there, along the normal) plus twice the tilt across the
+    ///   contact point (A's material there, along the normal) plus half the tilt across the
     ///   overlap (how far the surfaces' normals at the contact point turned, times the
-    ///   corrected box's diagonal: an update follows a tilt to first order only; eight times
-    ///   for a counted overlap, which it does not follow; none against a ball, which has no
+    ///   corrected box's diagonal: an update follows a tilt to first order, and what it misses
+    ///   at that tilt is what the volume law misses at its own limit; eight times the tilt for
+    ///   a counted overlap, which it does not follow; none against a ball, which has no
     ///   orientation); a lens or a cap, which an update follows by its exact law, by sixteen
     ///   times that, and
     /// - A's material point at the contact travels across the grid by at most
