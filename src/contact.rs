@@ -153,6 +153,11 @@ pub struct Lens {
     /// The ball's depth at the full evaluation (m): its radius less the other body's enlarged
     /// distance at its centre.
     pub depth: Real,
+    /// How far a cap may travel over the flat body's face (m) with all of it staying on the
+    /// face, where its exact law holds: infinite on a half-space, 0 between two balls (whose
+    /// lens no travel bounds) and where the face was not found to reach that far.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    pub glide: Real,
 }
 
 impl Lens {
@@ -228,6 +233,8 @@ impl Reference {
             (true, false) => self.in_plane(contact_point - self.contact_point).length(),
             _ => across + chord * self.lever,
         };
+        // A cap follows its exact law for as long as it stays on the face beneath it.
+        let glide = self.lens.map_or(0.0, |lens| lens.glide);
         // A lens follows its exact law, so only the grid's own error, which hardly changes with
         // the lens's size, is left for the allowance on its approach.
         let allowance = if self.lens.is_some() { LENS_ALLOWANCE } else { 1.0 };
@@ -239,7 +246,7 @@ impl Reference {
         if !(approach.abs() + tilt <= limit) {
             return Err(Refresh::Tilt);
         }
-        if !(travel <= fraction * self.cell) {
+        if !(travel <= (fraction * self.cell).max(glide)) {
             return Err(Refresh::Travel);
         }
         let (volume, indentation, surface_area) =
@@ -454,6 +461,42 @@ fn flat_at<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     flat
 }
 
+/// How far a cap, within `reach` of the contact point `x` (B's frame, across the `normal`),
+/// may travel over the face of body `s` beneath it with all of it staying on the face:
+/// infinite for an `unbounded` body (a half-space), else the first of four times `reach`,
+/// halved up to [`GLIDE_HALVINGS`] − 1 times, that the face is found to allow, or 0.
+///
+/// Where the body's distance gradient at the points `x ± √2 (reach + T) u` and `x ± √2
+/// (reach + T) v` (`u`, `v` across the normal) is its gradient at `x`, those points' nearest
+/// surface points lie on the face (inside a convex body the gradient is the normal of the
+/// nearest face, and a point's projection onto its nearest face's plane lies within every
+/// other face's half-space); the face is convex, so it holds their square and the disc of
+/// radius `reach + T` about `x` in it: a cap that travels by `T` stays on it.
+fn glide<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    shapes: (&A, &B),
+    relative: &Pose,
+    (x, normal): (Vector, Vector),
+    reach: Real,
+    gradients: [Vector; 2],
+    s: usize,
+    unbounded: bool,
+) -> Real {
+    if unbounded {
+        return Real::INFINITY;
+    }
+    let (u, v) = normal.any_orthonormal_pair();
+    let on_face = |step: Real| {
+        [u, -u, v, -v].into_iter().all(|w| {
+            let g = surface_gradients(shapes, relative, x + w * step)[s];
+            (g - gradients[s]).length() <= FLAT
+        })
+    };
+    (0..GLIDE_HALVINGS)
+        .map(|k| 4.0 * reach / (1 << k) as Real)
+        .find(|&travel| on_face(core::f64::consts::SQRT_2 * (reach + travel)))
+        .unwrap_or(0.0)
+}
+
 /// The geometry with a ball's normal force along the ball's own normal and through its
 /// centre. Every normal of a sphere passes through its centre, so no pressure on it has a
 /// torque about it; and the overlap of a ball with a face or another ball is symmetric about
@@ -565,6 +608,9 @@ const PARALLEL_AXES: Real = 1e-6;
 /// follows the lens's exact law, so its error is the grid's discretisation error at the last
 /// full evaluation carried to another depth.
 const LENS_ALLOWANCE: Real = 16.0;
+
+/// Travels a cap's [`glide`] tries: four times its reach, halved until one fits on the face.
+const GLIDE_HALVINGS: u32 = 6;
 
 /// Change of a unit gradient below which two points lie on one flat face (round-off of the
 /// frame transform).
@@ -781,7 +827,8 @@ impl ContactModel {
     ///   times that, and
     /// - A's material point at the contact travels across the grid by at most
     ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
-    ///   the roll's chord at the nearer body's bounding-sphere centre.
+    ///   the roll's chord at the nearer body's bounding-sphere centre; a ball's cap on a face
+    ///   as far as the face is found to reach ([`Lens::glide`]).
     ///
     /// Beyond either, the next evaluation is full. Values above 1 let the geometry drift far
     /// from what the grid gives; they exist to show that the bound matters.
@@ -945,8 +992,15 @@ impl ContactModel {
             _ => None,
         };
         let lens = radii.map(|radii| {
-            let mut lens = Lens { radii, enlargement, depth: 0.0 };
+            let mut lens = Lens { radii, enlargement, depth: 0.0, glide: 0.0 };
             lens.depth = lens.depth_at((a.shape, b.shape), &relative, centres);
+            // The flat body of a cap: the one whose radius is infinite.
+            let flat = [radii[0], radii[1]].iter().position(|r| !r.is_finite());
+            lens.glide = flat.map_or(0.0, |s| {
+                let unbounded = ![sphere_a.1, sphere_b.1][s].is_finite();
+                let shapes = (a.shape, b.shape);
+                glide(shapes, &relative, (contact_point, normal), reach, gradients, s, unbounded)
+            });
             lens
         });
         Reference {

@@ -823,6 +823,49 @@ fn geometry_reuse_moves_a_ball_across_an_edge() {
     }
 }
 
+/// A ball (4 mm) pressed 20 µm onto the middle of a cube's top face (1 cm wide) and rolled
+/// over it: its overlap is a cap of its depth alone wherever all of the cap lies on the face,
+/// so a roll of 0.5 mm (many grid cells) is an update within 1e-3 of the full evaluation's
+/// force, while a roll that takes the cap near the face's edge, where the face may end under
+/// it, is evaluated in full (`Refresh::Travel`).
+#[test]
+fn geometry_reuse_rolls_a_ball_over_a_face() {
+    let (full, reuse) = full_and_reused(5e8, 0.35, 6);
+    let (r, radius) = (0.005, 0.004);
+    let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
+    let ball = ConvexShape::ball(radius).unwrap();
+    let face = BodyState::at_rest(&cube, Pose::IDENTITY);
+    let at = |x: f64| {
+        // Rolled without slipping: turned by x / radius about z.
+        let pose = Pose::from_parts(
+            Vector::new(x, r + radius - 2e-5, 0.0),
+            Rotation::from_rotation_z(-x / radius),
+        );
+        BodyState::at_rest(&ball, pose)
+    };
+    let evaluate = |m: &ContactModel, x: f64, state: &mut Option<ContactState>| {
+        m.evaluate(&at(x), &face, state).unwrap().expect("overlap")
+    };
+    for (x, near_the_edge) in [(5e-4, false), (-5e-4, false), (4.8e-3, true)] {
+        let mut state = None;
+        evaluate(&reuse, 0.0, &mut state);
+        let updated = evaluate(&reuse, x, &mut state);
+        if near_the_edge {
+            assert_eq!(
+                updated.refresh,
+                Some(discrete_contact::contact::Refresh::Travel),
+                "a roll of {x} m to the edge"
+            );
+            continue;
+        }
+        assert!(updated.refresh.is_none(), "a roll of {x} m: {:?}", updated.refresh);
+        let exact = evaluate(&full, x, &mut None);
+        let (f, f_exact) = (updated.force.force_on_a, exact.force.force_on_a);
+        println!("{x:+.0e} m: force {:.6e} N, full {:.6e} N", f.length(), f_exact.length());
+        assert!((f - f_exact).length() <= 1e-3 * f_exact.length(), "force {f:?}, full {f_exact:?}");
+    }
+}
+
 /// A sub-cell model at `N_c = n` for two bodies of Young's modulus `e_mod` and Poisson's
 /// ratio `nu` (restitution 0.8) evaluating every contact in full, and the same with the default
 /// geometry reuse.
