@@ -154,8 +154,8 @@ pub struct Lens {
     /// distance at its centre.
     pub depth: Real,
     /// How far a cap may travel over the flat body's face (m) with all of it staying on the
-    /// face, where its exact law holds: infinite on a half-space, 0 between two balls (whose
-    /// lens no travel bounds) and where the face was not found to reach that far.
+    /// face, where its exact law holds: 0 between two balls (whose lens no travel bounds) and
+    /// where the face was not found to reach that far.
     #[cfg_attr(feature = "checkpoint", serde(default))]
     pub glide: Real,
 }
@@ -462,9 +462,9 @@ fn flat_at<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 }
 
 /// How far a cap, within `reach` of the contact point `x` (B's frame, across the `normal`),
-/// may travel over the face of body `s` beneath it with all of it staying on the face:
-/// infinite for an `unbounded` body (a half-space), else the first of four times `reach`,
-/// halved up to [`GLIDE_HALVINGS`] − 1 times, that the face is found to allow, or 0.
+/// may travel over the face of body `s` beneath it with all of it staying on the face: the
+/// first of four times `reach`, halved up to [`GLIDE_HALVINGS`] − 1 times, that the face is
+/// found to allow, or 0. (An unbounded body is probed too: it need not be a half-space.)
 ///
 /// Where the body's distance gradient at the points `x ± √2 (reach + T) u` and `x ± √2
 /// (reach + T) v` (`u`, `v` across the normal) is its gradient at `x`, those points' nearest
@@ -479,11 +479,7 @@ fn glide<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     reach: Real,
     gradients: [Vector; 2],
     s: usize,
-    unbounded: bool,
 ) -> Real {
-    if unbounded {
-        return Real::INFINITY;
-    }
     let (u, v) = normal.any_orthonormal_pair();
     let on_face = |step: Real| {
         [u, -u, v, -v].into_iter().all(|w| {
@@ -997,9 +993,7 @@ impl ContactModel {
             // The flat body of a cap: the one whose radius is infinite.
             let flat = [radii[0], radii[1]].iter().position(|r| !r.is_finite());
             lens.glide = flat.map_or(0.0, |s| {
-                let unbounded = ![sphere_a.1, sphere_b.1][s].is_finite();
-                let shapes = (a.shape, b.shape);
-                glide(shapes, &relative, (contact_point, normal), reach, gradients, s, unbounded)
+                glide((a.shape, b.shape), &relative, (contact_point, normal), reach, gradients, s)
             });
             lens
         });
