@@ -991,7 +991,7 @@ impl ContactModel {
             let mut lens = Lens { radii, enlargement, depth: 0.0, glide: 0.0 };
             lens.depth = lens.depth_at((a.shape, b.shape), &relative, centres);
             // The flat body of a cap: the one whose radius is infinite.
-            let flat = [radii[0], radii[1]].iter().position(|r| !r.is_finite());
+            let flat = radii.iter().position(|r| !r.is_finite());
             lens.glide = flat.map_or(0.0, |s| {
                 glide((a.shape, b.shape), &relative, (contact_point, normal), reach, gradients, s)
             });

@@ -645,12 +645,8 @@ fn geometry_reuse_follows_a_tilt_on_an_edge() {
 /// own limit.
 #[test]
 fn geometry_reuse_bounds_a_tilt_by_its_error() {
-    let mat = Material::new(5e6, 0.35).unwrap();
-    let full = ContactModel::new(
-        PairParameters::new(&mat, &mat, 0.5).unwrap(),
-        settings(4, IntegrationMode::Subcell),
-    );
-    let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
+    // Bodies at rest: the restitution's damping adds nothing.
+    let (full, reuse) = full_and_reused(5e6, 0.35, 4);
     let r = 0.005;
     let floor = ConvexShape::half_space(Vector::Y).unwrap();
     let wall = BodyState::at_rest(&floor, Pose::IDENTITY);
@@ -729,10 +725,7 @@ struct Tilted {
 
 impl Tilted {
     fn cube_on_the_floor(base: Rotation, turn: Rotation) -> Self {
-        let mat = Material::new(5e8, 0.35).unwrap();
-        let settings = settings(6, IntegrationMode::Subcell);
-        let full = ContactModel::new(PairParameters::new(&mat, &mat, 0.8).unwrap(), settings);
-        let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
+        let (full, reuse) = full_and_reused(5e8, 0.35, 6);
         let r = 0.005;
         let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
         let floor = ConvexShape::half_space(Vector::Y).unwrap();
@@ -781,12 +774,7 @@ impl Tilted {
 /// force is within 0.1 % of a full evaluation's, its normal within 1e-3 rad.
 #[test]
 fn geometry_reuse_moves_a_ball_across_an_edge() {
-    let mat = Material::new(5e8, 0.35).unwrap();
-    let full = ContactModel::new(
-        PairParameters::new(&mat, &mat, 0.8).unwrap(),
-        settings(6, IntegrationMode::Subcell),
-    );
-    let reuse = full.with_geometry_reuse(discrete_contact::contact::GEOMETRY_REUSE).unwrap();
+    let (full, reuse) = full_and_reused(5e8, 0.35, 6);
     let (r, radius) = (0.005, 0.004);
     let cube = ConvexShape::cuboid(Vector::splat(r)).unwrap();
     let ball = ConvexShape::ball(radius).unwrap();
