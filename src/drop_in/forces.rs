@@ -153,21 +153,29 @@ impl DiscreteContacts {
     }
 
     /// Computes and adds the contact forces of all handled candidate pairs; returns each body's
-    /// force and torque as they were before (for [`take_back`]).
+    /// force and torque as they were before (for [`take_back`]). `first`: the step's first
+    /// sub-step, which keeps the remembered gaps of this sub-step's candidates only.
     ///
     /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
-    /// candidates' order afterwards, so the result does not depend on the thread count.
+    /// candidates' order afterwards, so the result does not depend on the thread count. Each
+    /// candidate's contact state is moved out of the map (a box), updated where it is
+    /// evaluated, and moved back while the contact lives; the contacts of pairs that are no
+    /// longer candidates end.
     pub(super) fn apply_forces(
         &mut self,
         world: &mut PhysicsWorld,
         hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
+        first: bool,
     ) -> Result<Vec<Applied>> {
         let pairs = self.candidate_pairs(world, hooks)?;
+        let mut slots: Vec<Option<Box<ContactState>>> =
+            pairs.iter().map(|&(ca, cb, _)| self.states.remove(&(ca, cb))).collect();
         let eps = self.settings.enlargement();
         let this = &*self;
         let w = &*world;
-        let evaluate = |&(ca, cb, shift): &Candidate| -> Result<Checked> {
+        let evaluate = |(&(ca, cb, shift), slot): (&Candidate, &mut Option<Box<ContactState>>)|
+         -> Result<Checked> {
             let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
             let ColliderMotion { pose: pa, kinematics: ka, body: ba, .. } = Self::kinematics(w, ca);
             let ColliderMotion { pose: mut pb, kinematics: mut kb, body: bb, .. } =
@@ -175,33 +183,31 @@ impl DiscreteContacts {
             // B's nearest image (periodic boxes); a rigid shift changes no force or torque.
             pb.translation += shift;
             kb.center_of_mass += shift;
+            let (sa, sb) = (this.queries[&ca].as_ref(), this.queries[&cb].as_ref());
+            let film = |pb: &Pose, kb: &BodyKinematics| {
+                this.film(ha, hb, (&pa, sa, &ka, ba), (pb, sb, kb, bb)).map(Box::new)
+            };
             // A live contact is evaluated (it ends there when the bodies part). Other pairs:
             // a lower bound of their distance (`separation`) rules out those that do not touch
             // for a fraction of an evaluation's cost, and a pair found apart stays apart
             // without one while the bodies have moved less than its margin.
-            let mut state = this.states.get(&(ca, cb)).copied();
-            let (sa, sb) = (this.queries[&ca].as_ref(), this.queries[&cb].as_ref());
-            if state.is_none() {
+            if slot.is_none() {
                 if let Some(gap) = this.gaps.get(&(ca, cb)) {
                     if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) < gap.margin {
-                        return Ok((None, Some(*gap), None));
+                        return Ok((None, GapCheck::Kept, None));
                     }
                 }
                 let distance = separation((&pa, sa, &ha.shape), (&pb, sb, &hb.shape));
                 let margin = distance - this.reach();
                 if margin > 0.0 {
-                    return Ok((None, Some(Gap { margin, poses: (pa, pb) }), None));
+                    return Ok((None, GapCheck::Found(Gap { margin, poses: (pa, pb) }), None));
                 }
                 if distance - (eps[0] + eps[1]) > 0.0 {
                     // Within the film's reach, not in contact.
-                    return Ok((
-                        None,
-                        None,
-                        this.film(ha, hb, (&pa, sa, &ka, ba), (&pb, sb, &kb, bb)),
-                    ));
+                    return Ok((None, GapCheck::Closed, film(&pb, &kb)));
                 }
             }
-            let film = this.film(ha, hb, (&pa, sa, &ka, ba), (&pb, sb, &kb, bb));
+            let film = film(&pb, &kb);
             // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
             // not computed yet (zero before its first step) leaves it unknown.
             let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
@@ -212,29 +218,55 @@ impl DiscreteContacts {
             };
             let model = ContactModel::new(params, this.settings)
                 .with_geometry_reuse(this.geometry_reuse)?;
+            let mut state = slot.as_deref().copied();
             let out = model.evaluate(
                 &BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
                 &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
                 &mut state,
             )?;
-            Ok((
-                out.zip(state).map(|(out, state)| {
-                    Box::new(Evaluated { pair: (ca, cb), bodies: (ba, bb), out, state })
-                }),
-                None,
-                film,
-            ))
+            let (Some(out), Some(state)) = (out, state) else {
+                *slot = None;
+                return Ok((None, GapCheck::Closed, film));
+            };
+            match slot {
+                Some(boxed) => **boxed = state,
+                None => *slot = Some(Box::new(state)),
+            }
+            let f = out.force;
+            let evaluated = Evaluated {
+                bodies: (ba, bb),
+                force_on_a: f.force_on_a,
+                torques: (f.torque_on_a, f.torque_on_b),
+                refresh: out.refresh,
+                indentation: out.geometry.indentation,
+            };
+            Ok((Some(evaluated), GapCheck::Closed, film))
         };
         #[cfg(feature = "parallel")]
         let evaluated: Vec<Result<Checked>> = {
             use rayon::prelude::*;
-            pairs.par_iter().map(evaluate).collect()
+            pairs.par_iter().zip(slots.par_iter_mut()).map(evaluate).collect()
         };
         #[cfg(not(feature = "parallel"))]
-        let evaluated: Vec<Result<Checked>> = pairs.iter().map(evaluate).collect();
+        let evaluated: Vec<Result<Checked>> =
+            pairs.iter().zip(slots.iter_mut()).map(evaluate).collect();
+
+        // The live contacts go back to the map (on an error too, as far as they were updated).
+        let put_back = |states: &mut HashMap<_, _>, slots: Vec<Option<Box<ContactState>>>| {
+            for (&(ca, cb, _), slot) in pairs.iter().zip(slots) {
+                if let Some(state) = slot {
+                    states.insert((ca, cb), state);
+                }
+            }
+        };
+        if let Some(Err(_)) = evaluated.iter().find(|e| e.is_err()) {
+            put_back(&mut self.states, slots);
+            return Err(evaluated.into_iter().find_map(|e| e.err()).expect("an error was found"));
+        }
+        self.states.clear();
+        put_back(&mut self.states, slots);
 
         // Each body's sum runs in the candidates' order, whichever thread evaluated them.
-        let mut alive = HashMap::with_capacity_and_hasher(self.states.len(), Default::default());
         let mut added: HashMap<RigidBodyHandle, (Vector, Vector)> = HashMap::default();
         // A pair's force on A (B takes minus it) and its torques on A and B, to its bodies.
         let mut add = |bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
@@ -248,27 +280,39 @@ impl DiscreteContacts {
                 }
             }
         };
-        let mut gaps = HashMap::with_capacity_and_hasher(self.gaps.len(), Default::default());
-        for (e, &(ca, cb, _)) in evaluated.into_iter().zip(&pairs) {
-            let (contact, gap, film) = e?;
-            if let Some(gap) = gap {
-                gaps.insert((ca, cb), gap);
+        // The step's first sub-step keeps the gaps of its candidates only; the others update
+        // them in place.
+        let mut gaps = if first {
+            HashMap::with_capacity_and_hasher(self.gaps.len(), Default::default())
+        } else {
+            std::mem::take(&mut self.gaps)
+        };
+        for (e, &(ca, cb, _)) in evaluated.iter().zip(&pairs) {
+            let Ok((contact, gap, film)) = e else { unreachable!("errors were returned above") };
+            match gap {
+                GapCheck::Kept if first => {
+                    gaps.insert((ca, cb), self.gaps[&(ca, cb)]);
+                }
+                GapCheck::Kept => {}
+                GapCheck::Found(gap) => {
+                    gaps.insert((ca, cb), *gap);
+                }
+                GapCheck::Closed if !first => {
+                    gaps.remove(&(ca, cb));
+                }
+                GapCheck::Closed => {}
             }
-            if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film {
-                add(bodies, force_on_a, (torque_on_a, torque_on_b));
+            if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film.as_deref() {
+                add(*bodies, *force_on_a, (*torque_on_a, *torque_on_b));
             }
-            let Some(evaluated) = contact else { continue };
-            let Evaluated { pair, bodies, out, state } = *evaluated;
-            alive.insert(pair, state);
+            let Some(c) = contact else { continue };
             stats.evaluations += 1;
-            if let Some(why) = out.refresh {
+            if let Some(why) = c.refresh {
                 stats.refreshes.count(why);
             }
-            stats.max_indentation = stats.max_indentation.max(out.geometry.indentation);
-            let f = out.force;
-            add(bodies, f.force_on_a, (f.torque_on_a, f.torque_on_b));
+            stats.max_indentation = stats.max_indentation.max(c.indentation);
+            add(c.bodies, c.force_on_a, c.torques);
         }
-        self.states = alive;
         self.gaps = gaps;
         let mut applied = Vec::with_capacity(added.len());
         for (h, (f, t)) in added {

@@ -85,12 +85,14 @@ struct ColliderMotion {
 /// first (zero without periodic axes).
 type Candidate = (ColliderHandle, ColliderHandle, Vector);
 
-/// One evaluated contact, before its forces are summed.
+/// A live contact's forces on a sub-step, before they are summed (its state stays in its
+/// slot, see `forces`).
 struct Evaluated {
-    pair: (ColliderHandle, ColliderHandle),
     bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
-    out: crate::contact::ContactOutput,
-    state: ContactState,
+    force_on_a: Vector,
+    torques: (Vector, Vector),
+    refresh: Option<crate::contact::Refresh>,
+    indentation: Real,
 }
 
 /// A candidate pair last found apart: the exact distance's margin over the contact
@@ -99,6 +101,16 @@ struct Evaluated {
 struct Gap {
     margin: Real,
     poses: (Pose, Pose),
+}
+
+/// What a sub-step's check did to a candidate's remembered gap.
+enum GapCheck {
+    /// The pair is apart and its last gap still bounds its distance: kept as it is.
+    Kept,
+    /// The pair is apart by this newly measured gap.
+    Found(Gap),
+    /// The pair may touch: no gap to remember.
+    Closed,
 }
 
 /// The liquid film's force on a pair (see [`Lubrication`]): on A, the torques about each
@@ -110,11 +122,11 @@ struct Film {
     torque_on_b: Vector,
 }
 
-/// What a pair's check on a sub-step found: a contact, the gap to remember when the pair is
-/// apart, and the film's force when lubrication is on and the pair is within its cut-off. The
-/// contact is boxed: most candidates have none, and every candidate's check is collected and
-/// read on one thread each sub-step.
-type Checked = (Option<Box<Evaluated>>, Option<Gap>, Option<Film>);
+/// What a pair's check on a sub-step found: a contact's forces, what became of its gap, and
+/// the film's force when lubrication is on and the pair is within its cut-off (boxed: rare).
+/// Every candidate's check is collected and read on one thread each sub-step, so it holds
+/// no contact state.
+type Checked = (Option<Evaluated>, GapCheck, Option<Box<Film>>);
 
 /// How far any point of collider `h` may have moved between poses `from` and `to` (m): the
 /// translation plus the chord of the rotation at the farthest point, `2 r sin(θ/2) <= 2 r
@@ -164,9 +176,13 @@ pub struct DiscreteContacts {
     /// where missing (after a restart).
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     queries: HashMap<ColliderHandle, SharedShape>,
-    states: HashMap<(ColliderHandle, ColliderHandle), ContactState>,
-    /// Candidate pairs found apart, kept while they stay candidates: a pair that cannot have
-    /// closed its gap since needs no new distance (a cache; rebuilt by the exact distance).
+    /// The live contacts' states, boxed: each sub-step moves them out to its evaluations and
+    /// back, which a box does without copying the state.
+    states: HashMap<(ColliderHandle, ColliderHandle), Box<ContactState>>,
+    /// Candidate pairs found apart: a pair that cannot have closed its gap since needs no new
+    /// distance (a cache; rebuilt by the exact distance). A step's first sub-step keeps those
+    /// of its candidates, the later ones update them in place (a gap bounds the distance
+    /// whenever it is read, so one kept for a pair that left the candidates stays right).
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     gaps: HashMap<(ColliderHandle, ColliderHandle), Gap>,
     periodic: Option<PeriodicBox>,
@@ -415,7 +431,7 @@ impl DiscreteContacts {
 
     /// Whether the pair (in either order) is in contact now.
     pub fn contact(&self, a: ColliderHandle, b: ColliderHandle) -> Option<&ContactState> {
-        self.states.get(&(a, b)).or_else(|| self.states.get(&(b, a)))
+        self.states.get(&(a, b)).or_else(|| self.states.get(&(b, a))).map(|s| &**s)
     }
 
     /// Number of live contacts.
@@ -453,8 +469,8 @@ impl DiscreteContacts {
         let mut stats = StepStats { substeps, ..Default::default() };
         self.set_aside_collision_types(world);
         let mut result = Ok(());
-        for _ in 0..substeps {
-            let applied = match self.apply_forces(world, hooks, &mut stats) {
+        for k in 0..substeps {
+            let applied = match self.apply_forces(world, hooks, &mut stats, k == 0) {
                 Ok(a) => a,
                 Err(e) => {
                     result = Err(e);
