@@ -83,6 +83,38 @@ fn automatic_substeps_resolve_a_stiff_impact_and_keep_user_forces() {
     assert!(rb.translation().y > 0.0099);
 }
 
+/// A step refused while a contact lives (a body's velocity made NaN between steps) loses no
+/// contact: the ball is still pressed into the floor when the next step, with the velocity
+/// mended, resumes, and its force keeps it out of the floor.
+#[test]
+fn a_refused_step_keeps_the_live_contacts() {
+    let (mut world, mut contacts, ball) =
+        ball_on_floor(1e-4, StepPolicy::AutoSubstep { max_substeps: 5000 });
+    let in_contact = |contacts: &DiscreteContacts, world: &PhysicsWorld| {
+        let colliders: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
+        contacts.contact(colliders[0], colliders[1]).is_some()
+    };
+    // Into the floor: the impact is in its compression.
+    let mut steps = 0;
+    while !in_contact(&contacts, &world) {
+        contacts.step(&mut world).unwrap();
+        steps += 1;
+        assert!(steps < 20, "the ball never touched the floor");
+    }
+    let velocity = world.bodies[ball].linvel();
+    world.bodies[ball].set_linvel(discrete_contact::math::Vector::splat(f64::NAN), true);
+    let refused = contacts.step(&mut world);
+    assert!(matches!(refused, Err(Error::NonFinite { .. })), "{refused:?}");
+    assert_eq!(contacts.contact_count(), 1);
+    assert!(in_contact(&contacts, &world), "the refused step dropped the contact");
+    world.bodies[ball].set_linvel(velocity, true);
+    for _ in 0..20 {
+        contacts.step(&mut world).unwrap();
+    }
+    let rb = &world.bodies[ball];
+    assert!(rb.linvel().y > 1.5 && rb.translation().y > 0.0099, "v {}", rb.linvel().y);
+}
+
 /// A fast subset of the stability matrix (the full one: `cargo run --release --example
 /// stability_report`).
 #[test]
