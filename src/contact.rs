@@ -99,6 +99,11 @@ pub struct Reference {
     /// The bodies' distance gradients at the contact point, A's and B's (B's frame): an update
     /// turns `normal` as `∇d_B − ∇d_A` turns, and counts their turn as tilt.
     pub gradients: [Vector; 2],
+    /// The part of each body's surface those gradients belong to (A's, B's): an update takes
+    /// each body's gradient from the same part, so that it turns with the surfaces instead of
+    /// jumping from face to face where the contact point crosses an edge's bisector.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    pub features: [Feature; 2],
     /// Each body's bounding-sphere centre (A's in A's frame, B's in B's frame): an update moves
     /// the contact point as it would move between two balls about these centres.
     pub centres: [Vector; 2],
@@ -139,6 +144,48 @@ pub struct Reference {
     /// or a corner in the overlap, surfaces at an angle).
     #[cfg_attr(feature = "checkpoint", serde(default))]
     pub flux: Option<Flux>,
+}
+
+/// The part of a body's surface whose distance gives its gradient at a contact point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+pub enum Feature {
+    /// The whole body's distance (a smooth body, or a point where no single part was found).
+    #[default]
+    Whole,
+    /// A flat face, by its outward unit normal in the body's frame: a polyhedron's face
+    /// ([`Sdf::face_planes`]) or a flat face of a smooth body ([`Sdf::flat_faces`]).
+    Face(Vector),
+    /// The smooth part of a body with flat faces ([`Sdf::smooth_part`]): a cylinder's side.
+    Smooth,
+}
+
+impl Feature {
+    /// The part of `shape` whose distance gives its gradient `g` at `p` (both in the body's
+    /// frame): the face whose normal `g` is, else the smooth part when its gradient is `g`,
+    /// else the whole body.
+    fn at<S: Sdf + ?Sized>(shape: &S, p: Vector, g: Vector) -> Self {
+        let flats = shape.flat_faces();
+        let faces = shape.face_planes().or_else(|| flats.clone()).unwrap_or_default();
+        if let Some(n) =
+            faces.iter().map(|(n, _)| n.normalize_or_zero()).find(|n| (*n - g).length() <= FLAT)
+        {
+            return Feature::Face(n);
+        }
+        if flats.is_some() && (shape.smooth_part(p).1 - g).length() <= FLAT {
+            return Feature::Smooth;
+        }
+        Feature::Whole
+    }
+
+    /// This part's outward unit gradient at `p` (the body's frame) on `shape`.
+    fn gradient<S: Sdf + ?Sized>(&self, shape: &S, p: Vector) -> Vector {
+        match *self {
+            Feature::Whole => shape.gradient(p),
+            Feature::Face(n) => n,
+            Feature::Smooth => shape.smooth_part(p).1,
+        }
+    }
 }
 
 /// A ball's overlap with a ball or a flat body (a lens or a cap), as [`Reference`] keeps it.
@@ -219,9 +266,7 @@ impl Reference {
         // A ball has no orientation: against one, the overlap is a function of the ball's
         // centre in the other body's frame alone, which the approach and the travel bound, and
         // the normal and the contact point are the other body's gradient at that centre
-        // (`through_ball_centres`, after every update), so no tilt counts. (The gradient inside
-        // a body with edges jumps from face to face where the contact point crosses an edge's
-        // bisector, which would count as a tilt of the angle between the faces.)
+        // (`through_ball_centres`, after every update), so no tilt counts.
         let ball_b = shapes.1.sphere_radius().is_some();
         let tilt = if ball_a || ball_b { 0.0 } else { weight * turned.length() * self.reach };
         // How far the contact travelled over the surfaces. A ball looks the same from every
@@ -364,7 +409,8 @@ impl Reference {
 
     /// How far the bodies' summed distance gradients turned at the contact point under A's
     /// `motion` since this reference (A now at `relative`), with the moved contact point (B's
-    /// frame) and the gradients there.
+    /// frame) and the gradients there, each from the part of its body's surface it came from
+    /// at the reference ([`features`](Self::features)).
     fn turn<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         shapes: (&A, &B),
@@ -372,7 +418,12 @@ impl Reference {
         motion: &Pose,
     ) -> (Vector, Vector, [Vector; 2]) {
         let contact_point = self.moved_contact_point(motion);
-        let gradients = surface_gradients(shapes, relative, contact_point);
+        let (a, b) = shapes;
+        let gradients = [
+            relative.rotation
+                * self.features[0].gradient(a, relative.inverse_transform_point(contact_point)),
+            self.features[1].gradient(b, contact_point),
+        ];
         let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
         (turned, contact_point, gradients)
     }
@@ -968,6 +1019,11 @@ impl ContactModel {
         let (mut r_a, mut r_b) =
             (radius(sphere_a, relative.transform_point(sphere_a.0)), radius(sphere_b, sphere_b.0));
         let gradients = surface_gradients((a.shape, b.shape), &relative, contact_point);
+        let in_a = relative.inverse_transform_point(contact_point);
+        let features = [
+            Feature::at(a.shape, in_a, relative.rotation.inverse() * gradients[0]),
+            Feature::at(b.shape, contact_point, gradients[1]),
+        ];
         // A body flat at the contact (a face) under a curved one: the contact point moves as
         // against a half-space, with the curved body (a ball sliding or rolling on a face
         // takes it along; a face moving over a ball leaves it at the ball).
@@ -1003,6 +1059,7 @@ impl ContactModel {
             contact_point,
             normal,
             gradients,
+            features,
             centres,
             radii: [r_a, r_b],
             volume: g.volume,
