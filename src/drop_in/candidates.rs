@@ -17,15 +17,12 @@ impl DiscreteContacts {
         &self,
         world: &PhysicsWorld,
         hooks: &dyn PhysicsHooks,
-    ) -> Result<Vec<Candidate>> {
-        let mut pairs: Vec<Candidate> = self
-            .half_space_pairs(world, hooks)
-            .into_iter()
-            .map(|(a, b)| (a, b, Vector::ZERO))
-            .collect();
+        out: &mut Vec<Candidate>,
+    ) -> Result<()> {
+        out.clear();
+        self.half_space_pairs(world, hooks, &mut |a, b| out.push((a, b, Vector::ZERO)));
         let margin = self.margin();
-        pairs.extend(self.sphere_pairs(world, hooks, |_, _| margin)?);
-        Ok(pairs)
+        self.sphere_pairs(world, hooks, |_, _| margin, &mut |a, b, shift| out.push((a, b, shift)))
     }
 
     /// Whether rapier would let colliders `a` and `b` push each other: on different bodies,
@@ -96,39 +93,46 @@ impl DiscreteContacts {
         }
     }
 
-    /// The handled unbounded colliders (half-spaces), in handle order.
-    fn half_spaces(&self) -> Vec<ColliderHandle> {
-        let mut planes: Vec<ColliderHandle> =
-            self.handled.iter().filter(|(_, h)| !h.radius.is_finite()).map(|(&c, _)| c).collect();
-        planes.sort_by_key(|c| c.into_raw_parts());
-        planes
+    /// The candidate search's memory, its lists of handled colliders in handle order brought
+    /// up to the handled set.
+    fn search(&self) -> std::sync::MutexGuard<'_, Neighbours> {
+        let mut guard = self.neighbours.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let n = &mut *guard;
+        if n.generation != Some(self.generation) {
+            n.all = self.handled.keys().copied().collect();
+            n.all.sort_by_key(|c| c.into_raw_parts());
+            let bounded = |c: &ColliderHandle| self.handled[c].radius.is_finite();
+            n.bounded = n.all.iter().copied().filter(bounded).collect();
+            n.half_spaces = n.all.iter().copied().filter(|c| !bounded(c)).collect();
+            n.list = NeighbourList::default();
+            n.generation = Some(self.generation);
+        }
+        guard
     }
 
-    /// The pairs of two handled colliders of which one is unbounded (a half-space), the
-    /// lower handle first, in the half-spaces' handle order and then the other collider's:
-    /// every such pair that rapier's rules admit, as rapier's broad phase pairs a half-space
-    /// (its box is unbounded) with every collider — a few per body, whose gap the candidates'
-    /// check answers from its cache while the body stays far.
+    /// Calls `pair` with each pair of two handled colliders of which one is unbounded (a
+    /// half-space), the lower handle first, in the half-spaces' handle order and then the other
+    /// collider's: every such pair that rapier's rules admit, as rapier's broad phase pairs a
+    /// half-space (its box is unbounded) with every collider — a few per body, whose gap the
+    /// candidates' check answers from its cache while the body stays far.
     pub(super) fn half_space_pairs(
         &self,
         world: &PhysicsWorld,
         hooks: &dyn PhysicsHooks,
-    ) -> Vec<(ColliderHandle, ColliderHandle)> {
+        pair: &mut dyn FnMut(ColliderHandle, ColliderHandle),
+    ) {
+        let n = self.search();
         let key = |c: &ColliderHandle| c.into_raw_parts();
-        let mut others: Vec<ColliderHandle> = self.handled.keys().copied().collect();
-        others.sort_by_key(key);
-        let mut pairs = Vec::new();
-        for p in self.half_spaces() {
-            for &c in &others {
+        for p in &n.half_spaces {
+            for c in &n.all {
                 // Two half-spaces once, from the first of them.
-                let once = self.handled[&c].radius.is_finite() || key(&p) < key(&c);
-                let pair = if key(&p) < key(&c) { (p, c) } else { (c, p) };
-                if c != p && once && self.interact(world, hooks, pair.0, pair.1) {
-                    pairs.push(pair);
+                let once = self.handled[c].radius.is_finite() || key(p) < key(c);
+                let (a, b) = if key(p) < key(c) { (*p, *c) } else { (*c, *p) };
+                if c != p && once && self.interact(world, hooks, a, b) {
+                    pair(a, b);
                 }
             }
         }
-        pairs
     }
 
     /// Half the reach of a pair — the contact enlargement, or the lubrication cut-off if that
@@ -144,46 +148,36 @@ impl DiscreteContacts {
         self.lubrication.map_or(contact, |l| contact.max(l.cutoff()))
     }
 
-    /// Pairs of handled bounded colliders, at least one on a dynamic body, whose bounding
-    /// spheres grown by `reach(collider, kinematics)` each meet (through the periodic faces
-    /// when a box is set); in handle order. Answered from the Verlet list (see `neighbours`).
+    /// Calls `pair` with each pair of handled bounded colliders, at least one on a dynamic
+    /// body, whose bounding spheres grown by `reach(collider, kinematics)` each meet (through
+    /// the periodic faces when a box is set, with the image shift); in handle order. Answered
+    /// from the Verlet list (see `neighbours`).
     pub(super) fn sphere_pairs(
         &self,
         world: &PhysicsWorld,
         hooks: &dyn PhysicsHooks,
         reach: impl Fn(&Handled, &BodyKinematics) -> Real,
-    ) -> Result<Vec<Candidate>> {
-        let mut guard = self.neighbours.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-        let n = &mut *guard;
-        if n.generation != Some(self.generation) {
-            n.bounded = self
-                .handled
-                .iter()
-                .filter(|(_, h)| h.radius.is_finite())
-                .map(|(&c, _)| c)
-                .collect();
-            n.bounded.sort_by_key(|c| c.into_raw_parts());
-            n.list = NeighbourList::default();
-            n.generation = Some(self.generation);
-        }
-        let count = n.bounded.len();
-        let (mut spheres, mut reaches, mut mobile) =
-            (Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count));
-        for c in &n.bounded {
+        pair: &mut dyn FnMut(ColliderHandle, ColliderHandle, Vector),
+    ) -> Result<()> {
+        let mut guard = self.search();
+        let Neighbours { bounded, list, spheres, reaches, mobile, found, .. } = &mut *guard;
+        spheres.clear();
+        reaches.clear();
+        mobile.clear();
+        for c in bounded.iter() {
             let h = &self.handled[c];
             let ColliderMotion { pose, kinematics: k, mass, .. } = Self::kinematics(world, *c);
             spheres.push(Sphere { centre: pose.transform_point(h.centre), radius: h.radius });
             reaches.push(reach(h, &k));
             mobile.push(mass.is_finite());
         }
-        let found = n.list.query(&spheres, &reaches, self.periodic.as_ref())?;
-        Ok(found
-            .into_iter()
-            .filter(|&(i, j, _)| {
-                (mobile[i] || mobile[j]) && self.interact(world, hooks, n.bounded[i], n.bounded[j])
-            })
-            .map(|(i, j, shift)| (n.bounded[i], n.bounded[j], shift))
-            .collect())
+        list.query(spheres, reaches, self.periodic.as_ref(), found)?;
+        for &(i, j, shift) in found.iter() {
+            if (mobile[i] || mobile[j]) && self.interact(world, hooks, bounded[i], bounded[j]) {
+                pair(bounded[i], bounded[j], shift);
+            }
+        }
+        Ok(())
     }
 
     /// How many times the neighbour list has been built.
@@ -209,8 +203,9 @@ impl DiscreteContacts {
         // Spheres grown by the margin and the distance they travel: the periodic candidates
         // and more.
         let reach = |h: &Handled, k: &BodyKinematics| margin + speed(h, k) * dt;
-        let mut pairs = self.half_space_pairs(world, hooks);
-        pairs.extend(self.sphere_pairs(world, hooks, reach)?.into_iter().map(|(a, b, _)| (a, b)));
+        let mut pairs = Vec::new();
+        self.half_space_pairs(world, hooks, &mut |a, b| pairs.push((a, b)));
+        self.sphere_pairs(world, hooks, reach, &mut |a, b, _| pairs.push((a, b)))?;
         Ok(pairs)
     }
 }

@@ -152,25 +152,42 @@ impl DiscreteContacts {
             .with_stiffness(self.stiffness)
     }
 
-    /// Computes and adds the contact forces of all handled candidate pairs; returns each body's
-    /// force and torque as they were before (for [`take_back`]). `first`: the step's first
-    /// sub-step, which keeps the remembered gaps of this sub-step's candidates only.
+    /// Computes and adds the contact forces of all handled candidate pairs; leaves in the
+    /// sub-step buffers' `applied` each body's force and torque as they were before (for
+    /// [`take_back`]). `first`: the step's first sub-step, which keeps the remembered gaps of
+    /// this sub-step's candidates only.
     ///
     /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
     /// candidates' order afterwards, so the result does not depend on the thread count. Each
     /// candidate's contact state is moved out of the map (a box), updated where it is
     /// evaluated, and moved back while the contact lives; the contacts of pairs that are no
-    /// longer candidates end.
+    /// longer candidates end. The lists a sub-step fills are kept between sub-steps.
     pub(super) fn apply_forces(
         &mut self,
         world: &mut PhysicsWorld,
         hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
         first: bool,
-    ) -> Result<Vec<Applied>> {
-        let pairs = self.candidate_pairs(world, hooks)?;
-        let mut slots: Vec<Option<Box<ContactState>>> =
-            pairs.iter().map(|&(ca, cb, _)| self.states.remove(&(ca, cb))).collect();
+    ) -> Result<()> {
+        let mut buffers = std::mem::take(&mut self.buffers);
+        let result = self.forces_into(world, hooks, stats, first, &mut buffers);
+        self.buffers = buffers;
+        result
+    }
+
+    /// [`apply_forces`](Self::apply_forces) with the sub-step's buffers taken out of `self`.
+    fn forces_into(
+        &mut self,
+        world: &mut PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+        stats: &mut StepStats,
+        first: bool,
+        buffers: &mut SubstepBuffers,
+    ) -> Result<()> {
+        let SubstepBuffers { pairs, slots, checks, added, applied } = buffers;
+        self.candidate_pairs(world, hooks, pairs)?;
+        slots.clear();
+        slots.extend(pairs.iter().map(|&(ca, cb, _)| self.states.remove(&(ca, cb))));
         let eps = self.settings.enlargement();
         let this = &*self;
         let w = &*world;
@@ -243,31 +260,33 @@ impl DiscreteContacts {
             Ok((Some(evaluated), GapCheck::Closed, film))
         };
         #[cfg(feature = "parallel")]
-        let evaluated: Vec<Result<Checked>> = {
+        {
             use rayon::prelude::*;
-            pairs.par_iter().zip(slots.par_iter_mut()).map(evaluate).collect()
-        };
+            pairs.par_iter().zip(slots.par_iter_mut()).map(evaluate).collect_into_vec(checks);
+        }
         #[cfg(not(feature = "parallel"))]
-        let evaluated: Vec<Result<Checked>> =
-            pairs.iter().zip(slots.iter_mut()).map(evaluate).collect();
+        {
+            checks.clear();
+            checks.extend(pairs.iter().zip(slots.iter_mut()).map(evaluate));
+        }
 
         // The live contacts go back to the map (on an error too, as far as they were updated).
-        let put_back = |states: &mut HashMap<_, _>, slots: Vec<Option<Box<ContactState>>>| {
-            for (&(ca, cb, _), slot) in pairs.iter().zip(slots) {
+        let put_back = |states: &mut HashMap<_, _>, slots: &mut Vec<Option<Box<ContactState>>>| {
+            for (&(ca, cb, _), slot) in pairs.iter().zip(slots.drain(..)) {
                 if let Some(state) = slot {
                     states.insert((ca, cb), state);
                 }
             }
         };
-        if let Some(Err(_)) = evaluated.iter().find(|e| e.is_err()) {
+        if let Some(k) = checks.iter().position(|e| e.is_err()) {
             put_back(&mut self.states, slots);
-            return Err(evaluated.into_iter().find_map(|e| e.err()).expect("an error was found"));
+            return Err(checks.swap_remove(k).err().expect("an error was found"));
         }
         self.states.clear();
         put_back(&mut self.states, slots);
 
         // Each body's sum runs in the candidates' order, whichever thread evaluated them.
-        let mut added: HashMap<RigidBodyHandle, (Vector, Vector)> = HashMap::default();
+        added.clear();
         // A pair's force on A (B takes minus it) and its torques on A and B, to its bodies.
         let mut add = |bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
                        f: Vector,
@@ -287,7 +306,7 @@ impl DiscreteContacts {
         } else {
             std::mem::take(&mut self.gaps)
         };
-        for (e, &(ca, cb, _)) in evaluated.iter().zip(&pairs) {
+        for (e, &(ca, cb, _)) in checks.iter().zip(pairs.iter()) {
             let Ok((contact, gap, film)) = e else { unreachable!("errors were returned above") };
             match gap {
                 GapCheck::Kept if first => {
@@ -314,8 +333,8 @@ impl DiscreteContacts {
             add(c.bodies, c.force_on_a, c.torques);
         }
         self.gaps = gaps;
-        let mut applied = Vec::with_capacity(added.len());
-        for (h, (f, t)) in added {
+        applied.clear();
+        for (&h, &(f, t)) in added.iter() {
             if let Some(rb) = world.bodies.get_mut(h) {
                 if rb.is_dynamic() {
                     applied.push((h, rb.user_force(), rb.user_torque()));
@@ -324,7 +343,7 @@ impl DiscreteContacts {
                 }
             }
         }
-        Ok(applied)
+        Ok(())
     }
 }
 

@@ -128,6 +128,19 @@ struct Film {
 /// no contact state.
 type Checked = (Option<Evaluated>, GapCheck, Option<Box<Film>>);
 
+/// The lists a sub-step fills, kept between sub-steps so that a sub-step allocates none (once
+/// they have grown to the scene's size): the candidate pairs, their contact states while they
+/// are evaluated, their checks, each body's summed force and torque, and the bodies' own
+/// forces and torques before these were added (for [`take_back`]).
+#[derive(Default)]
+struct SubstepBuffers {
+    pairs: Vec<Candidate>,
+    slots: Vec<Option<Box<ContactState>>>,
+    checks: Vec<Result<Checked>>,
+    added: HashMap<RigidBodyHandle, (Vector, Vector)>,
+    applied: Vec<Applied>,
+}
+
 /// How far any point of collider `h` may have moved between poses `from` and `to` (m): the
 /// translation plus the chord of the rotation at the farthest point, `2 r sin(θ/2) <= 2 r
 /// |q_to − q_from|` (the quaternions' sign chosen nearer; no cancellation at small angles).
@@ -200,6 +213,9 @@ pub struct DiscreteContacts {
     /// them cleared in the world (see `set_aside_collision_types`); empty between steps.
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     set_aside: HashMap<ColliderHandle, ActiveCollisionTypes>,
+    /// A sub-step's lists, kept between sub-steps.
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    buffers: SubstepBuffers,
 }
 
 /// The drop-in's tangential law unless set: the spring, so that a scene at rest stays at rest.
@@ -207,13 +223,20 @@ fn default_tangential_law() -> TangentialLaw {
     TangentialLaw::Spring
 }
 
-/// The handled bounded colliders in handle order (for the generation of the handled set they
-/// were taken from) and their Verlet list.
+/// The candidate search's memory: the handled colliders in handle order (all, the bounded and
+/// the half-spaces, for the generation of the handled set they were taken from), the bounded
+/// ones' Verlet list, and the buffers a search fills (kept, so a sub-step allocates none).
 #[derive(Default)]
 struct Neighbours {
     generation: Option<u64>,
+    all: Vec<ColliderHandle>,
     bounded: Vec<ColliderHandle>,
+    half_spaces: Vec<ColliderHandle>,
     list: NeighbourList,
+    spheres: Vec<Sphere>,
+    reaches: Vec<Real>,
+    mobile: Vec<bool>,
+    found: Vec<(usize, usize, Vector)>,
 }
 
 impl DiscreteContacts {
@@ -249,6 +272,7 @@ impl DiscreteContacts {
             generation: 0,
             neighbours: Default::default(),
             set_aside: HashMap::default(),
+            buffers: SubstepBuffers::default(),
         })
     }
 
@@ -470,15 +494,12 @@ impl DiscreteContacts {
         self.set_aside_collision_types(world);
         let mut result = Ok(());
         for k in 0..substeps {
-            let applied = match self.apply_forces(world, hooks, &mut stats, k == 0) {
-                Ok(a) => a,
-                Err(e) => {
-                    result = Err(e);
-                    break;
-                }
-            };
+            if let Err(e) = self.apply_forces(world, hooks, &mut stats, k == 0) {
+                result = Err(e);
+                break;
+            }
             world.step_with_events(&Hooks { handled: &self.handled, user: hooks }, events);
-            take_back(world, &applied);
+            take_back(world, &self.buffers.applied);
         }
         world.integration_parameters.dt = saved.0;
         world.integration_parameters.num_solver_iterations = saved.1;

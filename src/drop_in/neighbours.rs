@@ -33,32 +33,30 @@ pub(crate) struct NeighbourList {
 }
 
 impl NeighbourList {
-    /// Pairs `(i, j, shift)`, `i < j`, of `spheres` whose gap is at most `reach[i] + reach[j]`
-    /// (through the periodic faces when a box is given, `shift` moving `j` to its image
-    /// nearest `i`), in index order; rebuilds the list first when it cannot answer. The
-    /// spheres must be the same bodies, in the same order, at every call (a caller that
-    /// changes them starts a new list).
+    /// Puts into `out` (cleared first) the pairs `(i, j, shift)`, `i < j`, of `spheres` whose
+    /// gap is at most `reach[i] + reach[j]` (through the periodic faces when a box is given,
+    /// `shift` moving `j` to its image nearest `i`), in index order; rebuilds the list first
+    /// when it cannot answer. The spheres must be the same bodies, in the same order, at every
+    /// call (a caller that changes them starts a new list).
     pub(crate) fn query(
         &mut self,
         spheres: &[Sphere],
         reach: &[Real],
         periodic: Option<&PeriodicBox>,
-    ) -> Result<Vec<(usize, usize, Vector)>> {
+        out: &mut Vec<(usize, usize, Vector)>,
+    ) -> Result<()> {
         if !self.answers(spheres, reach, periodic) {
             self.build(spheres, reach, periodic)?;
         }
-        Ok(self
-            .pairs
-            .iter()
-            .filter_map(|&(i, j)| {
-                let (a, b) = (&spheres[i], &spheres[j]);
-                let shift =
-                    periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
-                ((b.centre + shift - a.centre).length()
-                    <= a.radius + b.radius + reach[i] + reach[j])
-                    .then_some((i, j, shift))
-            })
-            .collect())
+        out.clear();
+        out.extend(self.pairs.iter().filter_map(|&(i, j)| {
+            let (a, b) = (&spheres[i], &spheres[j]);
+            let shift =
+                periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a.centre, b.centre));
+            ((b.centre + shift - a.centre).length() <= a.radius + b.radius + reach[i] + reach[j])
+                .then_some((i, j, shift))
+        }));
+        Ok(())
     }
 
     /// How many times the list has been built.
@@ -166,7 +164,8 @@ mod tests {
                 let reach: Vec<Real> = (0..300)
                     .map(|i| if step % 2 == 0 { 1e-3 } else { 1e-3 + velocity[i].length() })
                     .collect();
-                let pairs = list.query(&spheres, &reach, periodic.as_ref()).unwrap();
+                let mut pairs = Vec::new();
+                list.query(&spheres, &reach, periodic.as_ref(), &mut pairs).unwrap();
                 let expected = brute(&spheres, &reach, periodic.as_ref());
                 assert_eq!(
                     pairs.iter().map(|&(i, j, _)| (i, j)).collect::<Vec<_>>(),
