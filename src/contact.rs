@@ -866,8 +866,10 @@ impl ContactModel {
     /// (see the module docs) while
     /// - its local indentation changes by at most `fraction × d` — the approach at the
     ///   contact point (A's material there, along the normal) plus half the tilt across the
-    ///   overlap (how far the surfaces' normals at the contact point turned, times the
-    ///   corrected box's diagonal: an update follows a tilt to first order, and what it misses
+    ///   overlap (how far the surfaces' normals at the contact point turned, each on the face
+    ///   or smooth part it lay on at the full evaluation, so that crossing an edge's bisector
+    ///   is no tilt, times the corrected box's diagonal: an update follows a tilt to first
+    ///   order, and what it misses
     ///   at that tilt is what the volume law misses at its own limit; eight times the tilt for
     ///   a counted overlap, which it does not follow; none against a ball, which has no
     ///   orientation); a lens or a cap, which an update follows by its exact law, by sixteen
