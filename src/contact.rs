@@ -869,11 +869,10 @@ impl ContactModel {
     ///   overlap (how far the surfaces' normals at the contact point turned, each on the face
     ///   or smooth part it lay on at the full evaluation, so that crossing an edge's bisector
     ///   is no tilt, times the corrected box's diagonal: an update follows a tilt to first
-    ///   order, and what it misses
-    ///   at that tilt is what the volume law misses at its own limit; eight times the tilt for
-    ///   a counted overlap, which it does not follow; none against a ball, which has no
-    ///   orientation); a lens or a cap, which an update follows by its exact law, by sixteen
-    ///   times that, and
+    ///   order, and what it misses at that tilt is what the volume law misses at its own
+    ///   limit; eight times the tilt for a counted overlap, which it does not follow; none
+    ///   against a ball, which has no orientation); a lens or a cap, which an update follows
+    ///   by its exact law, by sixteen times that, and
     /// - A's material point at the contact travels across the grid by at most
     ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
     ///   the roll's chord at the nearer body's bounding-sphere centre; a ball's cap on a face
