@@ -418,12 +418,8 @@ impl Reference {
         motion: &Pose,
     ) -> (Vector, Vector, [Vector; 2]) {
         let contact_point = self.moved_contact_point(motion);
-        let (a, b) = shapes;
-        let gradients = [
-            relative.rotation
-                * self.features[0].gradient(a, relative.inverse_transform_point(contact_point)),
-            self.features[1].gradient(b, contact_point),
-        ];
+        let gradients =
+            [0, 1].map(|s| gradient_on(shapes, relative, s, self.features[s], contact_point));
         let turned = (gradients[0] + gradients[1]) - (self.gradients[0] + self.gradients[1]);
         (turned, contact_point, gradients)
     }
@@ -482,11 +478,27 @@ impl Reference {
 
 /// The bodies' distance gradients at `x` (B's frame, A at `relative` in it): A's, then B's.
 fn surface_gradients<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-    (a, b): (&A, &B),
+    shapes: (&A, &B),
     relative: &Pose,
     x: Vector,
 ) -> [Vector; 2] {
-    [relative.rotation * a.gradient(relative.inverse_transform_point(x)), b.gradient(x)]
+    [0, 1].map(|s| gradient_on(shapes, relative, s, Feature::Whole, x))
+}
+
+/// Body `s`'s (0: A, 1: B) outward unit gradient on the part `feature` of its surface at `x`
+/// (B's frame, A at `relative` in it).
+fn gradient_on<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    (a, b): (&A, &B),
+    relative: &Pose,
+    s: usize,
+    feature: Feature,
+    x: Vector,
+) -> Vector {
+    if s == 0 {
+        relative.rotation * feature.gradient(a, relative.inverse_transform_point(x))
+    } else {
+        feature.gradient(b, x)
+    }
 }
 
 /// Whether each body (A, B) is flat at `x` (B's frame, A at `relative` in it), where its
@@ -534,7 +546,7 @@ fn glide<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let (u, v) = normal.any_orthonormal_pair();
     let on_face = |step: Real| {
         [u, -u, v, -v].into_iter().all(|w| {
-            let g = surface_gradients(shapes, relative, x + w * step)[s];
+            let g = gradient_on(shapes, relative, s, Feature::Whole, x + w * step);
             (g - gradients[s]).length() <= FLAT
         })
     };

@@ -718,12 +718,12 @@ fn geometry_reuse_bounds_a_tilt_by_its_error() {
                         "{name}, {depth:.0e} m, ρ = {rho}: force {force:.4}, point {point:.4}"
                     );
                     updated_at_half += usize::from(rho == 0.5);
+                    worst.0 = force.max(worst.0);
                     if name.contains("bisector") {
-                        worst = (force.max(worst.0), worst.1);
                         worst_bisector = point.max(worst_bisector);
                         bisectors_updated += usize::from(rho <= 0.5);
                     } else {
-                        worst = (force.max(worst.0), point.max(worst.1));
+                        worst.1 = point.max(worst.1);
                     }
                 }
             }
