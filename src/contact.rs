@@ -6,7 +6,9 @@
 //! than one cell of its overlap grid, yet a full evaluation integrates the whole grid again.
 //! A live contact therefore keeps its last full geometry in B's frame ([`Reference`]) and,
 //! while the pair's relative motion since then stays small against the indentation and the
-//! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead: the
+//! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead —
+//! less a body of revolution's turn about its own axis, which moves no surface (a cylinder
+//! rolling or spinning is the same body turned) —: the
 //! indentation by the approach (how far A's material at the contact point moved along the
 //! normal; a ball's centre, whose turning moves no surface), the volume along the overlap's
 //! own power law `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the
@@ -228,9 +230,10 @@ impl Lens {
 }
 
 impl Reference {
-    /// The geometry after A moved (relative to B) to `relative`, or why a full evaluation is
-    /// needed instead: the motion exceeds the allowances of the reuse `fraction` (see
-    /// [`ContactModel::with_geometry_reuse`]), or the update lost the overlap.
+    /// The geometry after A moved (relative to B, now at `pose_b`) to `relative`, or why a
+    /// full evaluation is needed instead: the motion exceeds the allowances of the reuse
+    /// `fraction` (see [`ContactModel::with_geometry_reuse`]), or the update lost the overlap.
+    /// The poses are [`representative`](Self::representative)'s.
     fn update<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         shapes: (&A, &B),
@@ -445,6 +448,39 @@ impl Reference {
         v - self.normal * self.normal.dot(v)
     }
 
+    /// A's pose in B's frame (for A now at `relative`) and B's pose (now `pose_b`), each
+    /// body of revolution ([`Sdf::revolution_axis`]) turned back about its own axis by as much
+    /// as it turned about it since this reference; `None` where neither turned so. Such a body
+    /// is the same body after any turn about its axis, so the pair is the same pair, and the
+    /// turn is no motion for an update: a cylinder spinning on its side does not lift off it,
+    /// and one rolling on it slides as far. A body's turn since the reference is split into its
+    /// twist about the axis and the rest (swing–twist); the twist is taken back.
+    fn representative<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        (a, b): (&A, &B),
+        relative: &Pose,
+        pose_b: &Pose,
+    ) -> Option<(Pose, Pose)> {
+        let (mut relative, mut pose_b, mut turned) = (*relative, *pose_b, false);
+        if let Some(twist) = a.revolution_axis().and_then(|axis| {
+            // A's turn in its own frame since the reference.
+            twist_about(self.relative.rotation.inverse() * relative.rotation, axis)
+        }) {
+            relative *= twist.inverse();
+            turned = true;
+        }
+        if let Some(twist) = b.revolution_axis().and_then(|axis| {
+            // A's turn in B's frame since the reference: B's own turn about its axis shows
+            // here as the inverse turn about it.
+            twist_about(relative.rotation * self.relative.rotation.inverse(), axis)
+        }) {
+            relative = twist.inverse() * relative;
+            pose_b *= twist;
+            turned = true;
+        }
+        turned.then_some((relative, pose_b))
+    }
+
     /// A's motion in B's frame since this reference, for A now at `relative`.
     fn motion_since(&self, relative: &Pose) -> Pose {
         *relative * self.relative.inverse()
@@ -474,6 +510,23 @@ impl Reference {
             x + moved_a * (r_b / (r_a + r_b))
         }
     }
+}
+
+/// The turn about the axis `(point, unit direction)` that is the twist of `turn` about the
+/// direction (`turn` = swing · twist, the swing about an axis normal to it); `None` where
+/// `turn` has no twist (or no defined one: a half turn about a normal axis).
+fn twist_about(turn: Rotation, (point, axis): (Vector, Vector)) -> Option<Pose> {
+    let along = Vector::new(turn.x, turn.y, turn.z).dot(axis);
+    if along == 0.0 {
+        return None;
+    }
+    let twist = Rotation::from_xyzw(axis.x * along, axis.y * along, axis.z * along, turn.w);
+    let norm = twist.length();
+    if !(norm > 1e-12) {
+        return None;
+    }
+    let twist = twist / norm;
+    Some(Pose::from_parts(point - twist * point, twist))
 }
 
 /// The bodies' distance gradients at `x` (B's frame, A at `relative` in it): A's, then B's.
@@ -924,7 +977,19 @@ impl ContactModel {
             None => Err(Refresh::FirstTouch),
             Some(s) => match &s.reference {
                 Some(r) if self.reuse > 0.0 => {
-                    r.update((a.shape, b.shape), &relative, &b.pose, s.corrected_box, self.reuse)
+                    let update = |relative: &Pose, pose_b: &Pose| {
+                        r.update((a.shape, b.shape), relative, pose_b, s.corrected_box, self.reuse)
+                    };
+                    // A body of revolution turned back about its axis first; where that moves
+                    // the contact beyond an allowance (a disc rolling on its rim carries its
+                    // contact point round with it, the turned-back one slides), the pair as it
+                    // is: either describes the same pair exactly.
+                    match r.representative((a.shape, b.shape), &relative, &b.pose) {
+                        Some((turned, pose_b)) => {
+                            update(&turned, &pose_b).or_else(|_| update(&relative, &b.pose))
+                        }
+                        None => update(&relative, &b.pose),
+                    }
                 }
                 _ => Err(Refresh::Off),
             },
@@ -1014,7 +1079,10 @@ impl ContactModel {
         let reach = sides.length();
         let (exponent, depth_rate) = volume_law(
             previous,
-            |r| -r.material_shift(&r.motion_since(&relative)).dot(r.normal),
+            |r| {
+                let now = r.representative((a.shape, b.shape), &relative, &b.pose);
+                -r.material_shift(&r.motion_since(&now.map_or(relative, |(p, _)| p))).dot(r.normal)
+            },
             g,
         );
         let contact_point = b.pose.inverse_transform_point(g.contact_point);

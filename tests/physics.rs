@@ -880,6 +880,70 @@ fn geometry_reuse_rolls_a_ball_over_a_face() {
     }
 }
 
+/// A body of revolution is the same body after any turn about its own axis: a cylinder and a
+/// capsule lying 20 µm deep on a floor, spun about their axes by up to 0.8 rad in forty steps
+/// (each body as A on the floor, and as B under it), keep every update and the first full
+/// evaluation's force to round-off (a spin is neither an approach nor a lift); rolled without
+/// slipping, they are updated as a full evaluation gives them.
+#[test]
+fn geometry_reuse_spins_a_body_of_revolution_about_its_axis() {
+    let (full, reuse) = full_and_reused(5e8, 0.35, 6);
+    let radius = 0.005;
+    let cylinder = ConvexShape::cylinder(0.01, radius).unwrap();
+    // Parry's capsule along y, as the cylinder's axis.
+    let capsule =
+        ConvexShape::capsule(Vector::new(0.0, -0.01, 0.0), Vector::new(0.0, 0.01, 0.0), radius)
+            .unwrap();
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    let ground = BodyState::at_rest(&floor, Pose::IDENTITY);
+    for (name, body) in [("cylinder", &cylinder), ("capsule", &capsule)] {
+        // Lying along z, turned by `turn` about its axis, rolled by `x` along the floor.
+        let at = |turn: f64, x: f64| {
+            let lying = Rotation::from_rotation_x(core::f64::consts::FRAC_PI_2);
+            let pose = Pose::from_parts(
+                Vector::new(x, radius - 2e-5, 0.0),
+                Rotation::from_rotation_z(-turn) * lying,
+            );
+            BodyState::at_rest(body, pose)
+        };
+        for body_first in [true, false] {
+            let evaluate =
+                |m: &ContactModel, turn: f64, x: f64, state: &mut Option<ContactState>| {
+                    let out = if body_first {
+                        m.evaluate(&at(turn, x), &ground, state)
+                    } else {
+                        m.evaluate(&ground, &at(turn, x), state)
+                    };
+                    out.unwrap().expect("overlap")
+                };
+            let mut state = None;
+            let first = evaluate(&reuse, 0.0, 0.0, &mut state).force.force_on_a;
+            for k in 1..=40 {
+                let turn = 0.02 * k as f64;
+                let spun = evaluate(&reuse, turn, 0.0, &mut state);
+                assert!(spun.refresh.is_none(), "{name} spun by {turn}: {:?}", spun.refresh);
+                let f = spun.force.force_on_a;
+                assert!(
+                    (f - first).length() <= 1e-9 * first.length(),
+                    "{name} spun by {turn}: force {f:?}, first {first:?}"
+                );
+            }
+            let mut state = None;
+            evaluate(&reuse, 0.0, 0.0, &mut state);
+            let (turn, x) = (0.008, 0.008 * radius);
+            let rolled = evaluate(&reuse, turn, x, &mut state);
+            assert!(rolled.refresh.is_none(), "{name} rolled: {:?}", rolled.refresh);
+            let exact = evaluate(&full, turn, x, &mut None);
+            let (f, f_exact) = (rolled.force.force_on_a, exact.force.force_on_a);
+            println!("{name} rolled: force {:.6e} N, full {:.6e} N", f.length(), f_exact.length());
+            assert!(
+                (f - f_exact).length() <= 1e-3 * f_exact.length(),
+                "{name} rolled: force {f:?}, full {f_exact:?}"
+            );
+        }
+    }
+}
+
 /// A sub-cell model at `N_c = n` for two bodies of Young's modulus `e_mod` and Poisson's
 /// ratio `nu` (restitution 0.8) evaluating every contact in full, and the same with the default
 /// geometry reuse.

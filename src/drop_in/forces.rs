@@ -92,35 +92,28 @@ impl DiscreteContacts {
 
     /// The liquid film's force on a pair whose colliders (`a`, `b`: pose, parry shape, body
     /// motion, body) are closer than the lubrication cut-off; `None` without lubrication or
-    /// when they are farther apart.
+    /// when they are farther apart. `nearest`: the bodies' nearest points (A's, B's) where
+    /// they are apart and [`separation`] found them, so that they are not looked for twice.
     fn film(
         &self,
         ha: &Handled,
         hb: &Handled,
         a: (&Pose, &dyn parry3d_f64::shape::Shape, &BodyKinematics, Option<RigidBodyHandle>),
         b: (&Pose, &dyn parry3d_f64::shape::Shape, &BodyKinematics, Option<RigidBodyHandle>),
+        nearest: Option<(Vector, Vector)>,
     ) -> Option<Film> {
         let lub = self.lubrication?;
-        // Parry's contact of a ball with a half-space is wrong with the ball first (its gap
-        // and first point), right with the half-space first: a half-space goes first.
-        let half_space = |h: &Handled| matches!(h.shape, ConvexShape::HalfSpace { .. });
-        let mut c = if half_space(hb) && !half_space(ha) {
-            let mut c = parry3d_f64::query::contact(b.0, b.1, a.0, a.1, lub.cutoff()).ok()??;
-            c.flip();
-            c
-        } else {
-            parry3d_f64::query::contact(a.0, a.1, b.0, b.1, lub.cutoff()).ok()??
-        };
-        // The film's force goes as 1/h: a gap from GJK, which between millimetre bodies can be
-        // tens of per cent long, is brought to the nearest points.
-        if c.dist > 0.0 {
-            let (x_a, x_b) =
-                nearest_points((&ha.shape, a.0), (&hb.shape, b.0), (c.point1, c.point2));
-            if let Some(n) = (x_b - x_a).try_normalize() {
-                c.dist = (x_b - x_a).length();
-                (c.point1, c.point2, c.normal1, c.normal2) = (x_a, x_b, n, -n);
+        let c = match nearest {
+            Some((x_a, x_b)) => {
+                let n = (x_b - x_a).try_normalize()?;
+                let dist = (x_b - x_a).length();
+                if dist > lub.cutoff() {
+                    return None;
+                }
+                parry3d_f64::query::Contact::new(x_a, x_b, n, -n, dist)
             }
-        }
+            None => film_contact((ha, a.0, a.1), (hb, b.0, b.1), lub.cutoff())?,
+        };
         let x = 0.5 * (c.point1 + c.point2);
         let velocity = |k: &BodyKinematics| k.linvel + k.angvel.cross(x - k.center_of_mass);
         // `normal1` points out of A, towards B: closing when A moves along it faster than B.
@@ -201,8 +194,8 @@ impl DiscreteContacts {
             pb.translation += shift;
             kb.center_of_mass += shift;
             let (sa, sb) = (this.queries[&ca].as_ref(), this.queries[&cb].as_ref());
-            let film = |pb: &Pose, kb: &BodyKinematics| {
-                this.film(ha, hb, (&pa, sa, &ka, ba), (pb, sb, kb, bb)).map(Box::new)
+            let film = |pb: &Pose, kb: &BodyKinematics, nearest| {
+                this.film(ha, hb, (&pa, sa, &ka, ba), (pb, sb, kb, bb), nearest)
             };
             // A live contact is evaluated (it ends there when the bodies part). Other pairs:
             // a lower bound of their distance (`separation`) rules out those that do not touch
@@ -214,17 +207,21 @@ impl DiscreteContacts {
                         return Ok((None, GapCheck::Kept, None));
                     }
                 }
-                let distance = separation((&pa, sa, &ha.shape), (&pb, sb, &hb.shape));
+                let (distance, nearest) =
+                    separation((&pa, sa, &ha.shape), (&pb, sb, &hb.shape));
                 let margin = distance - this.reach();
                 if margin > 0.0 {
                     return Ok((None, GapCheck::Found(Gap { margin, poses: (pa, pb) }), None));
                 }
                 if distance - (eps[0] + eps[1]) > 0.0 {
-                    // Within the film's reach, not in contact.
-                    return Ok((None, GapCheck::Closed, film(&pb, &kb)));
+                    // Within the film's reach, not in contact: the film's gap is the nearest
+                    // points' (a half-space's contact is parry's own, exact for it).
+                    let bounded = ha.radius.is_finite() && hb.radius.is_finite();
+                    let nearest = nearest.filter(|_| bounded);
+                    return Ok((None, GapCheck::Closed, film(&pb, &kb, nearest)));
                 }
             }
-            let film = film(&pb, &kb);
+            let film = film(&pb, &kb, None);
             // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
             // not computed yet (zero before its first step) leaves it unknown.
             let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
@@ -321,7 +318,7 @@ impl DiscreteContacts {
                 }
                 GapCheck::Closed => {}
             }
-            if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film.as_deref() {
+            if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film {
                 add(*bodies, *force_on_a, (*torque_on_a, *torque_on_b));
             }
             let Some(c) = contact else { continue };
@@ -347,9 +344,39 @@ impl DiscreteContacts {
     }
 }
 
+/// The film's contact between two colliders (handled, pose, parry shape) within `cutoff` of
+/// each other: parry's contact, its gap brought to the nearest points where they are apart.
+fn film_contact(
+    (ha, pa, sa): (&Handled, &Pose, &dyn parry3d_f64::shape::Shape),
+    (hb, pb, sb): (&Handled, &Pose, &dyn parry3d_f64::shape::Shape),
+    cutoff: Real,
+) -> Option<parry3d_f64::query::Contact> {
+    // Parry's contact of a ball with a half-space is wrong with the ball first (its gap
+    // and first point), right with the half-space first: a half-space goes first.
+    let half_space = |h: &Handled| matches!(h.shape, ConvexShape::HalfSpace { .. });
+    let mut c = if half_space(hb) && !half_space(ha) {
+        let mut c = parry3d_f64::query::contact(pb, sb, pa, sa, cutoff).ok()??;
+        c.flip();
+        c
+    } else {
+        parry3d_f64::query::contact(pa, sa, pb, sb, cutoff).ok()??
+    };
+    // The film's force goes as 1/h: a gap from GJK, which between millimetre bodies can be
+    // tens of per cent long, is brought to the nearest points.
+    if c.dist > 0.0 {
+        let (x_a, x_b) = nearest_points((&ha.shape, pa), (&hb.shape, pb), (c.point1, c.point2));
+        if let Some(n) = (x_b - x_a).try_normalize() {
+            c.dist = (x_b - x_a).length();
+            (c.point1, c.point2, c.normal1, c.normal2) = (x_a, x_b, n, -n);
+        }
+    }
+    Some(c)
+}
+
 /// A lower bound of the distance between two convex bodies (m; 0 when they touch or overlap,
-/// NaN when parry cannot tell), never above the true distance: each body as its parry shape
-/// at its pose and as its exact distance.
+/// NaN when parry cannot tell), never above the true distance, and the bodies' nearest points
+/// (A's, B's; world frame) where they are apart: each body as its parry shape at its pose and
+/// as its exact distance.
 ///
 /// Parry's GJK stops on absolute tolerances, so between millimetre bodies the distance it
 /// gives can exceed the true one by tens of per cent (a pair so ruled out would start its
@@ -361,22 +388,23 @@ impl DiscreteContacts {
 fn separation(
     (pa, sa, a): (&Pose, &dyn parry3d_f64::shape::Shape, &ConvexShape),
     (pb, sb, b): (&Pose, &dyn parry3d_f64::shape::Shape, &ConvexShape),
-) -> Real {
+) -> (Real, Option<(Vector, Vector)>) {
     use parry3d_f64::query::{closest_points, ClosestPoints};
     match closest_points(pa, sa, pb, sb, Real::MAX) {
         Ok(ClosestPoints::WithinMargin(p1, p2)) => {
             let (x_a, x_b) = nearest_points((a, pa), (b, pb), (p1, p2));
             let gap = x_b - x_a;
-            match (sa.as_support_map(), sb.as_support_map(), gap.try_normalize()) {
+            let bound = match (sa.as_support_map(), sb.as_support_map(), gap.try_normalize()) {
                 (Some(ma), Some(mb), Some(n)) => {
                     let apart = n.dot(mb.support_point(pb, -n)) - n.dot(ma.support_point(pa, n));
                     apart.clamp(0.0, gap.length())
                 }
                 _ => gap.length(),
-            }
+            };
+            (bound, Some((x_a, x_b)))
         }
-        Ok(ClosestPoints::Intersecting) => 0.0,
-        Ok(ClosestPoints::Disjoint) | Err(_) => Real::NAN,
+        Ok(ClosestPoints::Intersecting) => (0.0, None),
+        Ok(ClosestPoints::Disjoint) | Err(_) => (Real::NAN, None),
     }
 }
 
@@ -466,7 +494,7 @@ mod tests {
                 let truth = parry3d_f64::query::distance(&upa, &*ua, &upb, &*ub).unwrap().distance;
                 let (ca, cb) =
                     (ConvexShape::from_parry(&*a).unwrap(), ConvexShape::from_parry(&*b).unwrap());
-                let bound = separation((&pa, &*a, &ca), (&pb, &*b, &cb)) / size;
+                let bound = separation((&pa, &*a, &ca), (&pb, &*b, &cb)).0 / size;
                 assert!(
                     bound <= truth * (1.0 + 1e-9) + 1e-12,
                     "{kinds:?} at {size} m: {bound} > {truth}"

@@ -115,6 +115,7 @@ enum GapCheck {
 
 /// The liquid film's force on a pair (see [`Lubrication`]): on A, the torques about each
 /// body's centre of mass; B takes minus the force.
+#[derive(Clone, Copy)]
 struct Film {
     bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
     force_on_a: Vector,
@@ -123,10 +124,10 @@ struct Film {
 }
 
 /// What a pair's check on a sub-step found: a contact's forces, what became of its gap, and
-/// the film's force when lubrication is on and the pair is within its cut-off (boxed: rare).
+/// the film's force when lubrication is on and the pair is within its cut-off.
 /// Every candidate's check is collected and read on one thread each sub-step, so it holds
 /// no contact state.
-type Checked = (Option<Evaluated>, GapCheck, Option<Box<Film>>);
+type Checked = (Option<Evaluated>, GapCheck, Option<Film>);
 
 /// The lists a sub-step fills, kept between sub-steps so that a sub-step allocates none (once
 /// they have grown to the scene's size): the candidate pairs, their contact states while they

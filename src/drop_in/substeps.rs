@@ -38,11 +38,14 @@ impl DiscreteContacts {
         hooks: &dyn PhysicsHooks,
         dt: Real,
     ) -> Result<usize> {
+        // A pair, named only where an error reports it.
+        type Pair = (ColliderHandle, ColliderHandle);
+        let named = |(a, b): Pair| format!("colliders {a:?} and {b:?}");
         // (largest sub-step, the contact time that sets it, the pair)
-        let mut worst: Option<(Real, Real, String)> = None;
+        let mut worst: Option<(Real, Real, Pair)> = None;
         // The moving pair whose approach the coordinates resolve least: (approach speed over
         // the coordinates' spacing, speed, largest coordinate, spacing, the pair).
-        let mut coarsest: Option<(Real, Real, Real, Real, String)> = None;
+        let mut coarsest: Option<(Real, Real, Real, Real, Pair)> = None;
         let spring = self.tangential == TangentialLaw::Spring && !self.friction.is_none();
         let per_half_period = (MIN_SUBSTEPS_PER_CONTACT * self.substeps_per_contact
             / SUBSTEPS_PER_CONTACT)
@@ -100,19 +103,13 @@ impl DiscreteContacts {
             // through every speed down to zero at its deepest), a pair apart's its approach now.
             let impact = self.contact(ca, cb).map_or(approach, |s| s.reference_approach_speed);
             if impact >= AT_REST_SPEED && coarsest.as_ref().is_none_or(|c| impact / spacing < c.0) {
-                coarsest = Some((
-                    impact / spacing,
-                    impact,
-                    largest,
-                    spacing,
-                    format!("colliders {ca:?} and {cb:?}"),
-                ));
+                coarsest = Some((impact / spacing, impact, largest, spacing, (ca, cb)));
             }
             let depth = hertz_max_indentation(m_star, r_star, e_star, v_normal);
             let limit = self.indentation_limit * ha.half_size.min(hb.half_size);
             if depth > limit {
                 return Err(Error::ContactTooSoft {
-                    pair: format!("colliders {ca:?} and {cb:?}"),
+                    pair: named((ca, cb)),
                     speed: v_normal,
                     indentation: depth,
                     limit,
@@ -152,7 +149,7 @@ impl DiscreteContacts {
                 }
             }
             if worst.as_ref().is_none_or(|w| limit.0 < w.0) {
-                worst = Some((limit.0, limit.1, format!("colliders {ca:?} and {cb:?}")));
+                worst = Some((limit.0, limit.1, (ca, cb)));
             }
         }
         let Some((recommended, contact_time, pair)) = worst else {
@@ -172,7 +169,7 @@ impl DiscreteContacts {
                 recommended,
                 contact_time,
                 substeps_needed: needed,
-                pair,
+                pair: named(pair),
             });
         }
         let substeps = chosen.max(needed);
@@ -180,7 +177,7 @@ impl DiscreteContacts {
         if let Some((_, speed, largest, spacing, pair)) = coarsest {
             if speed * substep < PRECISION_SPACINGS * spacing {
                 return Err(Error::PrecisionTooLow {
-                    pair,
+                    pair: named(pair),
                     precision: boundary::PRECISION,
                     distance: largest,
                     substep,
