@@ -50,6 +50,14 @@ const CAP_FACES: usize = MAX_FACES + 1;
 /// No vertex: a vertex the clip cut off.
 const GONE: u16 = u16::MAX;
 
+/// A vertex's side of the plane being clipped, as a bit (see [`Links::class`]): a face's
+/// vertices' bits or-ed together tell at once whether it lies inside, beyond or across.
+const INSIDE: u8 = 1;
+/// On the plane (within the clip's tolerance).
+const ON: u8 = 2;
+/// Beyond the plane.
+const BEYOND: u8 = 4;
+
 /// A tangent plane `n·y <= h` of body `body` (0: A, 1: B).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Plane {
@@ -120,6 +128,8 @@ fn push<T, const N: usize>(buf: &mut [T; N], len: &mut usize, value: T) -> Optio
 struct Links {
     /// Each vertex's signed distance from the plane being clipped.
     sides: [Real; CAP_VERTS],
+    /// Each vertex's side of the plane: [`INSIDE`], [`ON`] or [`BEYOND`].
+    class: [u8; CAP_VERTS],
     /// Each vertex's index in the clipped polyhedron, or [`GONE`].
     kept: [u16; CAP_VERTS],
     /// The edges cut by the plane (their ends' indices, the lower first) and the new vertex.
@@ -128,6 +138,9 @@ struct Links {
     on_plane: [bool; CAP_VERTS],
     /// The cap's edges, one per clipped face, in the cap's order about the plane's normal.
     cap_edges: [(u16, u16); CAP_FACES],
+    /// Per vertex of the clipped polyhedron: the cap's edge that leaves it (its index in
+    /// `cap_edges`), or [`GONE`]; reset after each use.
+    leaving: [u16; CAP_VERTS],
 }
 
 /// Buffers for clipping, kept between cells (two polyhedra: the clip reads one, writes the
@@ -168,10 +181,12 @@ impl Scratch {
             polys: Box::new([Poly::EMPTY, Poly::EMPTY]),
             links: Box::new(Links {
                 sides: [0.0; CAP_VERTS],
+                class: [0; CAP_VERTS],
                 kept: [0; CAP_VERTS],
                 cut_edges: [(0, 0, 0); CAP_VERTS],
                 on_plane: [false; CAP_VERTS],
                 cap_edges: [(0, 0); CAP_FACES],
+                leaving: [GONE; CAP_VERTS],
             }),
             cap: Vec::with_capacity(2 * MAX_FACES),
             current: 0,
@@ -181,12 +196,26 @@ impl Scratch {
         }
     }
 
+    /// The volume and first moment of the last clip's polyhedron, and the rest of its
+    /// integrals ([`Scratch::integrals`]) only where they are needed: a cell's refining rounds
+    /// read its volume and centroid, and only the last round's facets count.
+    pub(super) fn integrals(&self, measure: Measure) -> Clipped {
+        facets(&self.polys[self.current], measure)
+    }
+
     /// Gathers into `vertices` the distinct vertices of the last clip's polyhedron.
     pub(super) fn gather_vertices(&mut self) {
         let Self { polys, vertices, current, .. } = self;
         vertices.clear();
         vertices.extend_from_slice(polys[*current].verts());
     }
+}
+
+/// Volume and first moment of a clipped cell (see [`Scratch::integrals`] for the rest).
+#[derive(Clone, Copy)]
+pub(super) struct Measure {
+    pub(super) volume: Real,
+    pub(super) moment: Vector,
 }
 
 /// Volume, first moment, per-body facet area vectors and areas, and the box of the clipped
@@ -220,7 +249,7 @@ pub(super) fn cuts(plane: &Plane, lo: Vector, hi: Vector, tol: Real) -> bool {
 }
 
 /// Sets the polyhedron to the cell `lo`–`hi` clipped by all of `scratch.planes` and returns
-/// its integrals; `None` when the polyhedron would outgrow the buffers (the caller integrates
+/// its volume and first moment ([`Scratch::integrals`] gives the rest); `None` when the polyhedron would outgrow the buffers (the caller integrates
 /// the cell's tetrahedra instead). Zero volume when the planes cut the cell away.
 ///
 /// `deepest_first` clips the planes that cut deepest first (the largest share of the box's
@@ -233,13 +262,13 @@ pub(super) fn clip_cell(
     hi: Vector,
     scratch: &mut Scratch,
     deepest_first: bool,
-) -> Option<Clipped> {
+) -> Option<Measure> {
     scratch.tol = tolerance(lo, hi);
     scratch.current = 0;
     let poly = &mut scratch.polys[0];
     if excluded(&scratch.planes, lo, hi, 4.0 * scratch.tol) {
         poly.clear();
-        return Some(integrals(poly));
+        return Some(measure(poly));
     }
     cell_faces(lo, hi, poly);
     if deepest_first {
@@ -259,7 +288,7 @@ pub(super) fn clip_cell(
 
 /// Clips the box `lo`–`hi`, already in the current polyhedron, by `scratch.planes`, those
 /// that cut deepest first (see [`clip_cell`]).
-fn clip_deepest_first(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option<Clipped> {
+fn clip_deepest_first(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option<Measure> {
     let (mid, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
     let depth = |p: &Plane| (p.n.dot(mid) - p.h) / p.n.abs().dot(half);
     scratch.planes.sort_unstable_by(|p, q| depth(q).total_cmp(&depth(p)).then(order(p, q)));
@@ -302,18 +331,18 @@ fn excluded(planes: &[Plane], lo: Vector, hi: Vector, margin: Real) -> bool {
 }
 
 /// Clips the polyhedron of the last [`clip_cell`] by `scratch.planes[from..]` and returns the
-/// integrals of what is left (`None` as there).
+/// volume and first moment of what is left (`None` as there).
 ///
 /// The planes are clipped in an order given by the geometry alone (sorted by their
 /// coefficients): the same for either labelling of the bodies.
-pub(super) fn clip_more(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
+pub(super) fn clip_more(from: usize, scratch: &mut Scratch) -> Option<Measure> {
     scratch.planes[from..].sort_unstable_by(order);
     clip_planes(from, scratch)
 }
 
 /// Clips the current polyhedron by `scratch.planes[from..]` in their order and returns the
-/// integrals of what is left (`None` as in [`clip_cell`]).
-fn clip_planes(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
+/// volume and first moment of what is left (`None` as in [`clip_cell`]).
+fn clip_planes(from: usize, scratch: &mut Scratch) -> Option<Measure> {
     for k in from..scratch.planes.len() {
         if scratch.polys[scratch.current].nf == 0 {
             break;
@@ -322,7 +351,7 @@ fn clip_planes(from: usize, scratch: &mut Scratch) -> Option<Clipped> {
             scratch.current = 1 - scratch.current;
         }
     }
-    Some(integrals(&scratch.polys[scratch.current]))
+    Some(measure(&scratch.polys[scratch.current]))
 }
 
 /// The box `lo`–`hi` clipped by `scratch.planes` (a whole overlap of two polyhedra bounded by
@@ -340,7 +369,8 @@ pub(super) fn clip_box(
     scratch.tol = tolerance(lo, hi);
     scratch.current = 0;
     cell_faces(lo, hi, &mut scratch.polys[0]);
-    let clipped = clip_deepest_first(lo, hi, scratch)?;
+    let measure = clip_deepest_first(lo, hi, scratch)?;
+    let clipped = scratch.integrals(measure);
     let poly = &scratch.polys[scratch.current];
     let mut footprint = super::footprint::Sums::default();
     let mut flux = super::flux::Sums::about((lo + hi) * 0.5);
@@ -358,11 +388,38 @@ pub(super) fn clip_box(
     Some((clipped, footprint, flux))
 }
 
-/// Volume, first moment, per-body facet area vectors and areas, and the box of `poly`.
-fn integrals(poly: &Poly) -> Clipped {
+/// Volume and first moment of `poly`: a tetrahedron from a point inside to each triangle of
+/// a fan over each face.
+fn measure(poly: &Poly) -> Measure {
+    let mut out = Measure { volume: 0.0, moment: Vector::ZERO };
+    if poly.nf == 0 {
+        return out;
+    }
+    let inner = poly.verts().iter().copied().sum::<Vector>() / poly.nv as Real;
+    for f in poly.faces() {
+        let p = |i: usize| poly.verts[poly.index[f.start + i] as usize];
+        // A fan of triangles from the face's first vertex, each the base of a tetrahedron
+        // with its apex at `inner`; each vertex's offset is taken once.
+        let p0 = p(0);
+        let q0 = p0 - inner;
+        let (mut p1, mut q1) = (p(1), p(1) - inner);
+        for i in 2..f.len {
+            let p2 = p(i);
+            let q2 = p2 - inner;
+            let v = q0.dot(q1.cross(q2)).abs() / 6.0;
+            out.volume += v;
+            out.moment += (inner + p0 + p1 + p2) * (0.25 * v);
+            (p1, q1) = (p2, q2);
+        }
+    }
+    out
+}
+
+/// `poly`'s integrals: its `measure`, each body's facet area vector and area, and its box.
+fn facets(poly: &Poly, measure: Measure) -> Clipped {
     let mut out = Clipped {
-        volume: 0.0,
-        moment: Vector::ZERO,
+        volume: measure.volume,
+        moment: measure.moment,
         normal: [Vector::ZERO; 2],
         area: [0.0; 2],
         lo: Vector::splat(Real::INFINITY),
@@ -371,31 +428,19 @@ fn integrals(poly: &Poly) -> Clipped {
     if poly.nf == 0 {
         return out;
     }
-    let inner = poly.verts().iter().copied().sum::<Vector>() / poly.nv as Real;
     for f in poly.faces() {
+        let Some(s) = f.body else { continue };
         let p = |i: usize| poly.verts[poly.index[f.start + i] as usize];
-        // A fan of triangles from the face's first vertex, each the base of a tetrahedron
-        // with its apex at `inner`; each vertex's offsets are taken once.
         let p0 = p(0);
-        let q0 = p0 - inner;
-        let (mut p1, mut a) = (p(1), Vector::ZERO);
-        let (mut q1, mut e1) = (p1 - inner, p1 - p0);
+        let (mut e1, mut a) = (p(1) - p0, Vector::ZERO);
         for i in 2..f.len {
-            let p2 = p(i);
-            let (q2, e2) = (p2 - inner, p2 - p0);
-            let v = q0.dot(q1.cross(q2)).abs() / 6.0;
-            out.volume += v;
-            out.moment += (inner + p0 + p1 + p2) * (0.25 * v);
-            if f.body.is_some() {
-                a += e1.cross(e2);
-            }
-            (p1, q1, e1) = (p2, q2, e2);
+            let e2 = p(i) - p0;
+            a += e1.cross(e2);
+            e1 = e2;
         }
-        if let Some(s) = f.body {
-            let area = 0.5 * a.length();
-            out.normal[s] += f.normal * area;
-            out.area[s] += area;
-        }
+        let area = 0.5 * a.length();
+        out.normal[s] += f.normal * area;
+        out.area[s] += area;
     }
     for v in poly.verts() {
         out.lo = out.lo.min(*v);
@@ -434,24 +479,31 @@ fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
 /// when the plane cuts nothing off, `None` when the result would outgrow the buffers.
 fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
     let Scratch { polys, links, cap, current, tol, .. } = scratch;
-    let Links { sides, kept, cut_edges, on_plane, cap_edges } = &mut **links;
+    let Links { sides, class, kept, cut_edges, on_plane, cap_edges, leaving } = &mut **links;
     let tol = *tol;
-    let mut beyond = false;
+    // Every vertex's side once: the faces below read it as bits.
+    let mut seen = 0u8;
     {
         let from = &polys[*current];
-        for (s, &x) in sides.iter_mut().zip(from.verts()) {
+        for ((s, c), &x) in sides.iter_mut().zip(class.iter_mut()).zip(from.verts()) {
             let d = plane.n.dot(x) - plane.h;
-            *s = if d.abs() <= tol { 0.0 } else { d };
-            beyond |= *s > 0.0;
+            (*s, *c) = if d.abs() <= tol {
+                (0.0, ON)
+            } else if d > 0.0 {
+                (d, BEYOND)
+            } else {
+                (d, INSIDE)
+            };
+            seen |= *c;
         }
     }
-    if !beyond {
+    if seen & BEYOND == 0 {
         // A face on the plane lies on that body's surface (a body's face on a node layer,
         // with the corners there outside the body: the plane was added as one that touches).
         let from = &mut polys[*current];
         let Poly { index, faces, nf, .. } = from;
         for f in &mut faces[..*nf] {
-            let on = |k: &u16| sides[*k as usize] == 0.0;
+            let on = |k: &u16| class[*k as usize] == ON;
             if f.body.is_none() && index[f.start..f.start + f.len].iter().all(on) {
                 (f.body, f.normal) = (Some(plane.body), plane.n);
             }
@@ -462,10 +514,10 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
     let (from, to) = if *current == 0 { (&a[0], &mut b[0]) } else { (&b[0], &mut a[0]) };
     // The result's lengths, kept in locals while it is written.
     let (mut nv, mut ni, mut nf) = (0, 0, 0);
-    for (k, (&x, &s)) in from.verts().iter().zip(sides.iter()).enumerate() {
-        kept[k] = if s <= 0.0 {
+    for (k, (&x, &c)) in from.verts().iter().zip(class.iter()).enumerate() {
+        kept[k] = if c != BEYOND {
             push(&mut to.verts, &mut nv, x)?;
-            on_plane[nv - 1] = s == 0.0;
+            on_plane[nv - 1] = c == ON;
             (nv - 1) as u16
         } else {
             GONE
@@ -473,7 +525,7 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
     }
     // Whether part of the polyhedron lies strictly inside the plane: then a face left wholly
     // on the plane is a sliver of a face nearly on it, not all that is left.
-    let inside_part = sides[..from.verts().len()].iter().any(|&s| s < 0.0);
+    let inside_part = seen & INSIDE != 0;
     let (mut n_cut, mut n_cap) = (0, 0);
     // A face whose cut leaves other than one edge on the plane (a degenerate cut, within
     // `tol`): the cap is then ordered by angle.
@@ -481,17 +533,11 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
     for f in from.faces() {
         let start = ni;
         let idx = &from.index[f.start..f.start + f.len];
-        let (mut inside, mut outside, mut touches) = (true, true, false);
-        for &i in idx {
-            let s = sides[i as usize];
-            inside &= s < 0.0;
-            outside &= s > 0.0;
-            touches |= s == 0.0;
-        }
-        if outside {
+        let sides_of_face = idx.iter().fold(0u8, |m, &i| m | class[i as usize]);
+        if sides_of_face == BEYOND {
             continue;
         }
-        if inside {
+        if sides_of_face == INSIDE {
             for &i in idx {
                 push(&mut to.index, &mut ni, kept[i as usize])?;
             }
@@ -503,14 +549,14 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
         let mut i = idx[idx.len() - 1] as usize;
         for &j in idx {
             let j = j as usize;
-            let (si, sj) = (sides[i], sides[j]);
-            if (si < 0.0 && sj > 0.0) || (si > 0.0 && sj < 0.0) {
+            let (ci, cj) = (class[i], class[j]);
+            if ci | cj == INSIDE | BEYOND {
                 // Each edge is cut once, from its inside end, for both of its faces.
                 let key = (i.min(j) as u16, i.max(j) as u16);
                 let v = match cut_edges[..n_cut].iter().find(|e| (e.0, e.1) == key) {
                     Some(e) => e.2,
                     None => {
-                        let (p, q) = if si < 0.0 { (i, j) } else { (j, i) };
+                        let (p, q) = if ci == INSIDE { (i, j) } else { (j, i) };
                         let (xp, xq) = (from.verts[p], from.verts[q]);
                         let x = xp + (xq - xp) * (sides[p] / (sides[p] - sides[q]));
                         push(&mut to.verts, &mut nv, x)?;
@@ -521,13 +567,13 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
                     }
                 };
                 push(&mut to.index, &mut ni, v)?;
-                if si < 0.0 {
+                if ci == INSIDE {
                     exit = v;
                 } else {
                     entry = v;
                 }
             }
-            if sj <= 0.0 {
+            if cj != BEYOND {
                 push(&mut to.index, &mut ni, kept[j])?;
             }
             i = j;
@@ -537,7 +583,7 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
             ni = start;
             continue;
         }
-        if !touches {
+        if sides_of_face & ON == 0 {
             // A clean cut: its edge on the plane runs from the exit to the entry (the faces
             // are counter-clockwise about their outward normals); the cap walks it backwards.
             push(cap_edges, &mut n_cap, (entry, exit))?;
@@ -586,7 +632,7 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
     }
     let start = ni;
     // The cap is the chain of the faces' cut edges, or else its points ordered by angle.
-    if !(chained && chain(&cap_edges[..n_cap], &mut to.index, &mut ni)) {
+    if !(chained && chain(&cap_edges[..n_cap], leaving, &mut to.index, &mut ni)) {
         ni = start;
         cap.clear();
         let on = to.verts[..nv].iter().zip(on_plane.iter()).filter(|v| *v.1).map(|v| *v.0);
@@ -609,36 +655,48 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
     (ni <= MAX_VERTS && nf <= MAX_FACES).then_some(true)
 }
 
-/// Appends to `out` (of length `len`) the cycle the cap's `edges` form, each vertex once;
-/// whether they form one (every edge used once, each vertex left by one edge), else `out`
-/// may hold part of it.
-fn chain(edges: &[(u16, u16)], out: &mut [u16; CAP_INDEX], len: &mut usize) -> bool {
-    if edges.len() < 3 || edges.len() > 128 {
+/// Appends to `out` (of length `len`) the cycle the cap's `edges` form, each vertex once,
+/// starting at the first edge's start; whether they form one (every edge used once, each
+/// vertex left by one edge), else `out` may hold part of it. `leaving` is all [`GONE`] for
+/// the edges' vertices, and is left so.
+fn chain(
+    edges: &[(u16, u16)],
+    leaving: &mut [u16; CAP_VERTS],
+    out: &mut [u16; CAP_INDEX],
+    len: &mut usize,
+) -> bool {
+    if edges.len() < 3 {
         return false;
     }
-    let mut used = 1u128;
-    let (first, mut at) = edges[0];
-    if push(out, len, first).is_none() {
-        return false;
+    // Each vertex's edge that leaves it; two edges leaving one vertex form no cycle.
+    let mut single = true;
+    for (k, e) in edges.iter().enumerate() {
+        let slot = &mut leaving[e.0 as usize];
+        single &= *slot == GONE;
+        *slot = k as u16;
     }
-    while at != first {
-        let mut next = None;
-        for (k, e) in edges.iter().enumerate() {
-            if e.0 == at && used & (1 << k) == 0 {
-                if next.is_some() {
-                    return false;
-                }
-                next = Some(k);
+    let mut closed = false;
+    if single {
+        // Walks from the first edge's start: the cap when it comes back there after every
+        // edge (sooner, the edges hold more than one cycle).
+        let first = edges[0].0;
+        let mut at = first;
+        for step in 1..=edges.len() {
+            let k = leaving[at as usize];
+            if k == GONE || push(out, len, at).is_none() {
+                break;
+            }
+            at = edges[k as usize].1;
+            if at == first {
+                closed = step == edges.len();
+                break;
             }
         }
-        let Some(k) = next else { return false };
-        used |= 1 << k;
-        if push(out, len, at).is_none() {
-            return false;
-        }
-        at = edges[k].1;
     }
-    used.count_ones() as usize == edges.len()
+    for e in edges {
+        leaving[e.0 as usize] = GONE;
+    }
+    closed
 }
 
 #[cfg(test)]
@@ -653,6 +711,7 @@ mod tests {
         let mut scratch = Scratch::new();
         scratch.planes.push(Plane { n, h: n.dot(Vector::new(0.5, 0.5, 0.0)), body: 1 });
         let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch, false).unwrap();
+        let c = scratch.integrals(c);
         assert!((c.volume - 0.5).abs() < 1e-14);
         let centroid = c.moment / c.volume;
         assert!((centroid - Vector::new(1.0 / 3.0, 1.0 / 3.0, 0.5)).length() < 1e-14);
@@ -670,6 +729,7 @@ mod tests {
             Plane { n: Vector::Z, h: 2.0, body: 1 },
         ]);
         let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch, false).unwrap();
+        let c = scratch.integrals(c);
         assert!((c.volume - 0.25).abs() < 1e-14);
         assert!((c.area[0] - 1.0).abs() < 1e-14 && c.area[1] == 0.0);
         scratch.planes.clear();
@@ -690,6 +750,7 @@ mod tests {
             Plane { n: n / n.length(), h: 0.5 / n.length(), body: 1 },
         ]);
         let c = clip_cell(Vector::ZERO, Vector::ONE, &mut scratch, false).unwrap();
+        let c = scratch.integrals(c);
         assert!((c.volume - 0.5).abs() < 1e-11, "volume {}", c.volume);
         assert!((c.normal[1] - Vector::X).length() < 1e-11, "facet {:?}", c.normal[1]);
     }

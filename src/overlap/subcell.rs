@@ -836,7 +836,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                         continue;
                     }
                 }
-                self.sums.add_clipped(&k);
+                self.sums.add_clipped(&self.scratch.integrals(k));
                 return;
             }
         }
@@ -885,7 +885,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
         match crease::clip_cell(c[0].x, c[7].x, &mut self.scratch, true) {
             Some(k) => {
-                self.sums.add_clipped(&k);
+                self.sums.add_clipped(&self.scratch.integrals(k));
                 true
             }
             None => false,
