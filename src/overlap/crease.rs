@@ -196,9 +196,10 @@ impl Scratch {
         }
     }
 
-    /// The volume and first moment of the last clip's polyhedron, and the rest of its
-    /// integrals ([`Scratch::integrals`]) only where they are needed: a cell's refining rounds
-    /// read its volume and centroid, and only the last round's facets count.
+    /// The integrals of the last clip's polyhedron: its `measure` (the volume and first
+    /// moment the clip returned) with each body's facet area vector and area, and its box.
+    /// Apart from the clip because a cell's refining rounds read only the volume and the
+    /// centroid, and only the last round's facets count.
     pub(super) fn integrals(&self, measure: Measure) -> Clipped {
         facets(&self.polys[self.current], measure)
     }
@@ -249,8 +250,9 @@ pub(super) fn cuts(plane: &Plane, lo: Vector, hi: Vector, tol: Real) -> bool {
 }
 
 /// Sets the polyhedron to the cell `lo`–`hi` clipped by all of `scratch.planes` and returns
-/// its volume and first moment ([`Scratch::integrals`] gives the rest); `None` when the polyhedron would outgrow the buffers (the caller integrates
-/// the cell's tetrahedra instead). Zero volume when the planes cut the cell away.
+/// its volume and first moment ([`Scratch::integrals`] gives the rest); `None` when the
+/// polyhedron would outgrow the buffers (the caller integrates the cell's tetrahedra instead).
+/// Zero volume when the planes cut the cell away.
 ///
 /// `deepest_first` clips the planes that cut deepest first (the largest share of the box's
 /// span beyond them), so the polyhedron the others cut stays small and one that ends empty
