@@ -6,10 +6,9 @@
 //! than one cell of its overlap grid, yet a full evaluation integrates the whole grid again.
 //! A live contact therefore keeps its last full geometry in B's frame ([`Reference`]) and,
 //! while the pair's relative motion since then stays small against the indentation and the
-//! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead —
-//! less a body of revolution's turn about its own axis, which moves no surface (a cylinder
-//! rolling or spinning is the same body turned) —: the
-//! indentation by the approach (how far A's material at the contact point moved along the
+//! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead
+//! (less a body of revolution's turn about its own axis, which moves no surface: a cylinder
+//! rolling or spinning is the same body turned): the indentation by the approach (how far A's material at the contact point moved along the
 //! normal; a ball's centre, whose turning moves no surface), the volume along the overlap's
 //! own power law `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the
 //! secant of the last two full evaluations, or at first the shape measure the stiffness
