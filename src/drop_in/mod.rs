@@ -6,6 +6,7 @@ mod candidates;
 mod forces;
 mod hooks;
 mod neighbours;
+mod network;
 mod substeps;
 
 use hooks::Hooks;

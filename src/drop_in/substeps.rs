@@ -16,10 +16,16 @@ impl DiscreteContacts {
     /// With friction through the tangential spring, its oscillation counts too: stiffness
     /// `κ k_n` against the tangential effective mass `m_t` (`1/m_t = Σ 1/m + r²/I_min` over the
     /// bodies, `r` the bounding radius; `2/7 m*` for two spheres), so its contact time is
-    /// `t_H √(m_t / (κ m*))`, about half of `t_H`. A live contact also counts with its own
-    /// stiffness `k_n = dF_n/dd` from its last evaluation (a face resting on a face is far
-    /// stiffer than the Hertz sphere of the bounding radii): half-periods `π √(m*/k_n)` and,
-    /// with the spring, `π √(m_t/(κ k_n))`. These need stability and a steady hold, not a
+    /// `t_H √(m_t / (κ m*))`, about half of `t_H`. Live contacts also count with their own
+    /// stiffness `k_n = dF_n/dd` from their last evaluation (a face resting on a face is far
+    /// stiffer than the Hertz sphere of the bounding radii): each pair's normal half-period
+    /// `π √(m*/k_n)`, and the half-period of the highest frequency of all of them together —
+    /// a network of springs `k_n` along each normal and, with the spring, `κ k_n` across it,
+    /// at each contact point's levers, with every body's mass and inertia tensor (see
+    /// `network`: a pile vibrates faster than any of its pairs, a face's contact under the
+    /// centre slower than a lever of the bounding radius would make it). A live contact whose
+    /// geometry is not kept (geometry reuse off) counts its spring alone instead,
+    /// `π √(m_t/(κ k_n))`. These need stability and a steady hold, not a
     /// restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`] sub-steps at the default
     /// [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps per contact are set,
     /// never fewer than [`STABLE_SUBSTEPS_PER_HALF_PERIOD`].
@@ -50,6 +56,9 @@ impl DiscreteContacts {
         let per_half_period = (MIN_SUBSTEPS_PER_CONTACT * self.substeps_per_contact
             / SUBSTEPS_PER_CONTACT)
             .max(STABLE_SUBSTEPS_PER_HALF_PERIOD);
+        // `None` where no estimate comes out (no live contact between moving bodies, or a
+        // degenerate network): each live contact's spring then counts alone.
+        let network = network::highest_frequency(self, world, spring);
         for (ca, cb) in self.lookahead_pairs(world, hooks, dt)? {
             let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
             let ColliderMotion { pose: pa, kinematics: ka, mass: ma, .. } =
@@ -133,10 +142,13 @@ impl DiscreteContacts {
             }
             // A live contact may be far stiffer than Hertz's sphere of the bounding radii (a face
             // on a face): its own stiffness's half-periods, normal and tangential, count too.
-            if let Some(k_n) = self.contact(ca, cb).map(|s| s.normal_stiffness).filter(|k| *k > 0.0)
-            {
+            // A contact of the network (below) has its spring resolved there, with the levers it
+            // has and the other contacts of its bodies.
+            if let Some(s) = self.contact(ca, cb).filter(|s| s.normal_stiffness > 0.0) {
+                let k_n = s.normal_stiffness;
                 resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
-                if let Some((kappa, m_t)) = tangential {
+                let in_network = network.is_some() && s.reference.is_some();
+                if let Some((kappa, m_t)) = tangential.filter(|_| !in_network) {
                     resolve(core::f64::consts::PI * (m_t / (kappa * k_n)).sqrt());
                 }
             }
@@ -150,6 +162,14 @@ impl DiscreteContacts {
             }
             if worst.as_ref().is_none_or(|w| limit.0 < w.0) {
                 worst = Some((limit.0, limit.1, (ca, cb)));
+            }
+        }
+        // The live contacts' network: its highest frequency's half-period, as a pair's own.
+        if let Some((omega2, pair)) = network {
+            let half_period = core::f64::consts::PI / omega2.sqrt();
+            let limit = half_period / per_half_period;
+            if worst.as_ref().is_none_or(|w| limit < w.0) {
+                worst = Some((limit, half_period, pair));
             }
         }
         let Some((recommended, contact_time, pair)) = worst else {
