@@ -9,8 +9,11 @@
 //! taken at the bounding radius (a contact under a face's centre has a short lever). The
 //! network's `ω²_max`, the largest eigenvalue of `M⁻¹K`, is estimated by power iteration from
 //! a fixed start: its Rayleigh quotient rises towards `ω²_max` from below and comes within a
-//! few per cent of it in [`ITERATIONS`] rounds on the piles measured (`docs/performance.md`),
-//! which the sub-step's margin ([`STABLE_SUBSTEPS_PER_HALF_PERIOD`]) covers.
+//! few per cent of the value of many more rounds in [`ITERATIONS`] rounds on the piles measured
+//! (`docs/performance.md`). That shortfall, and a face's resistance to tilting that point
+//! springs leave out (the overlap's centroid moves towards the deeper side), are for the
+//! sub-step's margin below explicit integration's limit ([`STABLE_SUBSTEPS_PER_HALF_PERIOD`]
+//! sub-steps per half-period at least) to cover.
 //!
 //! Contacts are taken in the order of their collider handles, so the estimate does not depend
 //! on the order of the contact map (a resumed run gives the same sub-steps).
@@ -260,7 +263,8 @@ mod tests {
         state
     }
 
-    /// A cube resting on a face vibrates fastest by sliding and rocking on its spring, whose
+    /// In the network, a cube resting on a face vibrates fastest by sliding and rocking on its
+    /// spring, whose
     /// lever is the half-height down to the face's centre (the contact point, the overlap's
     /// centroid, lies between `h - d` and `h` below the centre): `ω² = κ k (1/m + r²/I)`, far
     /// below what the bounding radius `√3 h` as the lever would give.

@@ -24,7 +24,8 @@ impl DiscreteContacts {
     /// at each contact point's levers, with every body's mass and inertia tensor (see
     /// `network`: a pile vibrates faster than any of its pairs, a face's contact under the
     /// centre slower than a lever of the bounding radius would make it). A live contact whose
-    /// geometry is not kept (geometry reuse off) counts its spring alone instead,
+    /// geometry is not kept (geometry reuse off, exact forms) counts its spring alone instead,
+    /// as does every contact where no estimate comes out,
     /// `π √(m_t/(κ k_n))`. These need stability and a steady hold, not a
     /// restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`] sub-steps at the default
     /// [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps per contact are set,
