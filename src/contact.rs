@@ -8,22 +8,22 @@
 //! while the pair's relative motion since then stays small against the indentation and the
 //! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead
 //! (less a body of revolution's turn about its own axis, which moves no surface: a cylinder
-//! rolling or spinning is the same body turned): the indentation by the approach (how far A's material at the contact point moved along the
-//! normal; a ball's centre, whose turning moves no surface), the volume along the overlap's
-//! own power law `V ∝ d^p` (a flat punch's `p = 1`, a cap's or an edge's 2, a corner's 3: the
-//! secant of the last two full evaluations, or at first the shape measure the stiffness
-//! uses) — or, for a ball against a ball, a half-space or a face (a lens or a cap), along the
-//! lens's exact law, the full evaluation scaled by the exact lens's volume and surface at the
-//! ball's depth then and now — the contact point as between two balls about
-//! the bodies' centres (a body flat at the contact — a face under a ball or a cylinder's side —
-//! as a half-space: the point goes with the curved body) and across the contact plane as a tilt
+//! rolling or spinning is the same body turned): the indentation by the approach (how far A's
+//! material at the contact point moved along the normal; a ball's centre, whose turning moves no
+//! surface), the volume along the overlap's own power law `V ∝ d^p` (a flat punch's `p = 1`, a
+//! cap's or an edge's 2, a corner's 3: the secant of the last two full evaluations, or at first the
+//! shape measure the stiffness uses) — or, for a ball against a ball, a half-space or a face (a
+//! lens or a cap), along the lens's exact law, the full evaluation scaled by the exact lens's
+//! volume and surface at the ball's depth then and now — the contact point as between two balls
+//! about the bodies' centres (a body flat at the contact — a face under a ball or a cylinder's side
+//! — as a half-space: the point goes with the curved body) and across the contact plane as a tilt
 //! of the surfaces moves the overlap's centroid (by the overlap's footprint,
 //! [`OverlapGeometry::footprint`], between nearly parallel surfaces; elsewhere — an edge or a
-//! corner in the overlap, surfaces at an angle — volume and centroid move as A's motion sweeps
-//! its surface through B, [`OverlapGeometry::flux`]), the normal as the surfaces' own normals at
-//! the contact point turn. First touch, a contact whose update would part the bodies, and any
-//! motion beyond the bound get a full evaluation. The rule reads only the contact's state, so
-//! results do not depend on the thread count and a checkpoint resumes bit-identically.
+//! corner in the overlap, surfaces at an angle — volume and centroid move as A's motion sweeps its
+//! surface through B, [`OverlapGeometry::flux`]), the normal as the surfaces' own normals at the
+//! contact point turn. First touch, a contact whose update would part the bodies, and any motion
+//! beyond the bound get a full evaluation. The rule reads only the contact's state, so results do
+//! not depend on the thread count and a checkpoint resumes bit-identically.
 
 use parry3d_f64::bounding_volume::Aabb;
 

@@ -35,12 +35,17 @@ struct Spring {
 }
 
 impl Spring {
-    /// The force on the first body for the bodies' velocities `v` (linear, angular).
-    fn force(&self, v: &[(Vector, Vector)]) -> Vector {
+    /// How far the first body's contact point moves against the second's when the bodies
+    /// move by `v` (linear, angular).
+    fn stretch(&self, v: &[(Vector, Vector)]) -> Vector {
         let at = |s: usize| {
             self.bodies[s].map_or(Vector::ZERO, |b| v[b].0 + v[b].1.cross(self.levers[s]))
         };
-        let u = at(0) - at(1);
+        at(0) - at(1)
+    }
+
+    /// The spring's force on the first body for a stretch `u`.
+    fn force(&self, u: Vector) -> Vector {
         let along = self.normal * u.dot(self.normal);
         -(along * self.normal_stiffness + (u - along) * self.tangential_stiffness)
     }
@@ -67,12 +72,8 @@ pub(super) fn highest_frequency(
     world: &PhysicsWorld,
     spring: bool,
 ) -> Option<(Real, (ColliderHandle, ColliderHandle))> {
-    let mut keys: Vec<_> = contacts
-        .states
-        .iter()
-        .filter(|(_, s)| s.normal_stiffness > 0.0 && s.reference.is_some())
-        .map(|(k, _)| *k)
-        .collect();
+    let mut keys: Vec<_> =
+        contacts.states.iter().filter(|(_, s)| s.normal_stiffness > 0.0).map(|(k, _)| *k).collect();
     keys.sort_by_key(|(a, b)| (a.into_raw_parts(), b.into_raw_parts()));
     let mut index: HashMap<RigidBodyHandle, usize> = HashMap::default();
     let mut bodies: Vec<Body> = Vec::new();
@@ -152,11 +153,11 @@ pub(super) fn highest_frequency(
         }
         p.iter_mut().for_each(|q| *q = (Vector::ZERO, Vector::ZERO));
         for s in &springs {
-            let f = s.force(&v);
-            for (end, sign) in [(0, 1.0), (1, -1.0)] {
+            let u = s.stretch(&v);
+            let f = s.force(u);
+            vkv -= f.dot(u);
+            for (end, f) in [(0, f), (1, -f)] {
                 if let Some(b) = s.bodies[end] {
-                    let f = f * sign;
-                    vkv -= v[b].0.dot(f) + v[b].1.dot(s.levers[end].cross(f));
                     p[b].0 += f;
                     p[b].1 += s.levers[end].cross(f);
                 }
@@ -183,11 +184,8 @@ pub(super) fn highest_frequency(
     }
     // The pair whose spring holds most of the mode's energy names the limit.
     let energy = |s: &Spring| {
-        -s.force(&v).dot({
-            let at =
-                |e: usize| s.bodies[e].map_or(Vector::ZERO, |b| v[b].0 + v[b].1.cross(s.levers[e]));
-            at(0) - at(1)
-        })
+        let u = s.stretch(&v);
+        -s.force(u).dot(u)
     };
     let pair = springs
         .iter()
@@ -264,10 +262,9 @@ mod tests {
     }
 
     /// In the network, a cube resting on a face vibrates fastest by sliding and rocking on its
-    /// spring, whose
-    /// lever is the half-height down to the face's centre (the contact point, the overlap's
-    /// centroid, lies between `h - d` and `h` below the centre): `ω² = κ k (1/m + r²/I)`, far
-    /// below what the bounding radius `√3 h` as the lever would give.
+    /// spring, whose lever is the half-height down to the face's centre (the contact point, the
+    /// overlap's centroid, lies between `h - d` and `h` below the centre):
+    /// `ω² = κ k (1/m + r²/I)`, far below what the bounding radius `√3 h` as the lever would give.
     #[test]
     fn a_cube_on_a_floor_vibrates_as_its_spring_at_the_face_centre() {
         let h = 0.01;

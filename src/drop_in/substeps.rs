@@ -25,11 +25,10 @@ impl DiscreteContacts {
     /// `network`: a pile vibrates faster than any of its pairs, a face's contact under the
     /// centre slower than a lever of the bounding radius would make it). A live contact whose
     /// geometry is not kept (geometry reuse off, exact forms) counts its spring alone instead,
-    /// as does every contact where no estimate comes out,
-    /// `π √(m_t/(κ k_n))`. These need stability and a steady hold, not a
-    /// restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`] sub-steps at the default
-    /// [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps per contact are set,
-    /// never fewer than [`STABLE_SUBSTEPS_PER_HALF_PERIOD`].
+    /// `π √(m_t/(κ k_n))`, as does every contact where no estimate comes out. These need stability
+    /// and a steady hold, not a restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`]
+    /// sub-steps at the default [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps
+    /// per contact are set, never fewer than [`STABLE_SUBSTEPS_PER_HALF_PERIOD`].
     ///
     /// The user's `filter_contact_pair` hook is not consulted here (a pair it would exclude
     /// still counts, so the advice never falls short); [`step_with_events`](Self::step_with_events)
