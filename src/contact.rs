@@ -30,7 +30,7 @@ use parry3d_f64::bounding_volume::Aabb;
 use crate::error::Result;
 use crate::force::{contact_force_with_history, BodyKinematics, ContactForce};
 use crate::material::PairParameters;
-use crate::math::{Pose, Real, Rotation, Vector};
+use crate::math::{Matrix, Pose, Real, Rotation, Vector};
 use crate::overlap::{
     compute_overlap, lens_measures, Flux, Footprint, OverlapGeometry, OverlapSettings,
 };
@@ -434,6 +434,33 @@ impl Reference {
     /// not along the line of the centres.
     fn material_shift(&self, motion: &Pose) -> Vector {
         motion.transform_point(self.contact_point) - self.contact_point
+    }
+
+    /// The overlap's resistance to tilting about the contact point (N·m/rad, B's frame), for a
+    /// contact whose normal stiffness is `normal_stiffness`: the torque on A per radian that A
+    /// turns against B, `K θ` with `K = (F/V) [n]ₓ S [n]ₓᵀ`, `S` the footprint's second moment
+    /// of area about the contact point. A tilt `θ` deepens the overlap on one side, its
+    /// centroid moves there by `S (θ × n) / V` ([`tilted`](Self::tilted), the updates follow
+    /// it), and the force `F` at it turns A back: a point spring at the contact point leaves
+    /// this out. `F` is the elastic force behind the stiffness (`2 d k_n / (1 + p)`, see
+    /// [`normal_stiffness`](crate::force::normal_stiffness)). `None` where an update does not
+    /// follow a tilt by the footprint (surfaces at an angle, no footprint).
+    pub(crate) fn rocking_stiffness(&self, normal_stiffness: Real) -> Option<Matrix> {
+        if !self.parallel() {
+            return None;
+        }
+        let f = self.footprint?;
+        let offset = self.in_plane(f.centroid - self.contact_point);
+        let spread = f.spread
+            + Matrix::from_cols(offset * offset.x, offset * offset.y, offset * offset.z) * f.area;
+        let p = crate::force::volume_exponent(self.volume, self.indentation, self.surface_area)
+            .clamp(1.0, 2.0);
+        let force = 2.0 * self.indentation * normal_stiffness / (1.0 + p);
+        let n = self.normal;
+        // `[n]ₓ`, the cross product with `n` as a matrix (columns `n × eᵢ`).
+        let cross = Matrix::from_cols(n.cross(Vector::X), n.cross(Vector::Y), n.cross(Vector::Z));
+        let k = cross * spread * cross.transpose() * (force / self.volume);
+        k.is_finite().then_some(k)
     }
 
     /// Whether the surfaces at the contact point are nearly parallel (the in-plane part of the

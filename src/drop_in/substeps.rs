@@ -21,14 +21,18 @@ impl DiscreteContacts {
     /// stiffer than the Hertz sphere of the bounding radii): each pair's normal half-period
     /// `π √(m*/k_n)`, and the half-period of the highest frequency of all of them together —
     /// a network of springs `k_n` along each normal and, with the spring, `κ k_n` across it,
-    /// at each contact point's levers, with every body's mass and inertia tensor (see
-    /// `network`: a pile vibrates faster than any of its pairs, a face's contact under the
-    /// centre slower than a lever of the bounding radius would make it). A live contact whose
+    /// at each contact point's levers, and each overlap's resistance to tilting where the
+    /// surfaces are nearly parallel, with every body's mass and inertia tensor (see `network`:
+    /// a pile vibrates faster than any of its pairs, a face's contact under the centre slower
+    /// than a lever of the bounding radius would make it). A live contact whose
     /// geometry is not kept (geometry reuse off, exact forms) counts its spring alone instead,
     /// `π √(m_t/(κ k_n))`, as does every contact where no estimate comes out. These need stability
     /// and a steady hold, not a restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`]
     /// sub-steps at the default [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps
     /// per contact are set, never fewer than [`STABLE_SUBSTEPS_PER_HALF_PERIOD`].
+    ///
+    /// A live contact whose stiffness is not finite (its force law overflowed) is reported
+    /// with [`Error::NonFinite`], naming the pair.
     ///
     /// The user's `filter_contact_pair` hook is not consulted here (a pair it would exclude
     /// still counts, so the advice never falls short); [`step_with_events`](Self::step_with_events)
@@ -146,6 +150,14 @@ impl DiscreteContacts {
             // has and the other contacts of its bodies.
             if let Some(s) = self.contact(ca, cb).filter(|s| s.normal_stiffness > 0.0) {
                 let k_n = s.normal_stiffness;
+                // A stiffness beyond the numbers (the force law overflowed) would ask for no
+                // sub-step at all.
+                if !k_n.is_finite() {
+                    return Err(Error::NonFinite {
+                        what: "normal stiffness of a live contact",
+                        detail: format!("{k_n} N/m between {}", named((ca, cb))),
+                    });
+                }
                 resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
                 let in_network = network.is_some() && s.reference.is_some();
                 if let Some((kappa, m_t)) = tangential.filter(|_| !in_network) {
