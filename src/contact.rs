@@ -84,6 +84,35 @@ pub struct ContactState {
     pub normal_stiffness: Real,
     /// The last full evaluation, while geometry reuse is on; `None` forces a full evaluation.
     pub reference: Option<Reference>,
+    /// Where the last evaluation put the contact: what the sub-step advice of the drop-in
+    /// couples the bodies at (`None` before the first evaluation).
+    pub frame: Option<ContactFrame>,
+}
+
+/// A contact's point as a material point of each body and its normal: where its spring joins
+/// the two bodies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
+pub struct ContactFrame {
+    /// The contact point in A's body frame and in B's (m): through a periodic box's faces the
+    /// bodies' poses may lie a box apart, so each body's lever comes from its own.
+    pub anchors: [Vector; 2],
+    /// Unit normal from B to A, in B's body frame.
+    pub normal: Vector,
+}
+
+impl ContactFrame {
+    /// The frame of a contact at `contact_point` with `normal` (world) between A at `pose_a`
+    /// and B at `pose_b`.
+    fn new(contact_point: Vector, normal: Vector, pose_a: &Pose, pose_b: &Pose) -> Self {
+        Self {
+            anchors: [
+                pose_a.inverse_transform_point(contact_point),
+                pose_b.inverse_transform_point(contact_point),
+            ],
+            normal: pose_b.rotation.inverse() * normal,
+        }
+    }
 }
 
 /// A full evaluation's geometry in B's body frame, with A's pose in that frame then: what the
@@ -1051,6 +1080,7 @@ impl ContactModel {
             tangential: TangentialHistory::default(),
             normal_stiffness: 0.0,
             reference: None,
+            frame: None,
         });
         // In a binary impact the approach speed only falls after first touch. A contact that
         // a third body drives faster (a pile, a contact begun while sliding) re-bases `c` on
@@ -1079,6 +1109,8 @@ impl ContactModel {
             s.tangential.sliding,
         );
         s.normal_stiffness = force.stiffness;
+        s.frame =
+            Some(ContactFrame::new(geometry.contact_point, geometry.normal, &a.pose, &b.pose));
         if self.params.tangential == crate::TangentialLaw::Spring {
             s.tangential.record(
                 spring.displacement,

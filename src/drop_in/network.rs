@@ -215,8 +215,7 @@ pub(super) fn highest_frequency(
     Some((lambda, pair))
 }
 
-/// The network of the live contacts with a kept geometry between moving bodies; `None` when
-/// there is none.
+/// The network of the live contacts between moving bodies; `None` when there is none.
 fn assemble(contacts: &DiscreteContacts, world: &PhysicsWorld, spring: bool) -> Option<Network> {
     let mut keys: Vec<_> =
         contacts.states.iter().filter(|(_, s)| s.normal_stiffness > 0.0).map(|(k, _)| *k).collect();
@@ -226,15 +225,13 @@ fn assemble(contacts: &DiscreteContacts, world: &PhysicsWorld, spring: bool) -> 
     let mut springs = Vec::with_capacity(keys.len());
     for (ca, cb) in keys {
         let s = &contacts.states[&(ca, cb)];
-        let Some(r) = s.reference else { continue };
+        let Some(frame) = s.frame else { continue };
         let (ma, mb) =
             (DiscreteContacts::kinematics(world, ca), DiscreteContacts::kinematics(world, cb));
         // Each body's lever to the contact point as seen from its own pose (through periodic
         // faces the two bodies' poses lie a box apart).
-        let points = [
-            ma.pose.transform_point(r.relative.inverse_transform_point(r.contact_point)),
-            mb.pose.transform_point(r.contact_point),
-        ];
+        let points =
+            [ma.pose.transform_point(frame.anchors[0]), mb.pose.transform_point(frame.anchors[1])];
         let mut slot = |m: &ColliderMotion| -> Option<usize> {
             let h = m.body?;
             let rb = world.bodies.get(h).filter(|rb| rb.is_dynamic())?;
@@ -263,8 +260,9 @@ fn assemble(contacts: &DiscreteContacts, world: &PhysicsWorld, spring: bool) -> 
         // A ball turning about its centre moves no surface: it resists no tilt.
         let ball = ha.shape.sphere_radius().is_some() || hb.shape.sphere_radius().is_some();
         let turn = Matrix::from_quat(mb.pose.rotation);
-        let rocking = r
-            .rocking_stiffness(s.normal_stiffness)
+        // Only a kept geometry (geometry reuse on, no exact form) knows the footprint.
+        let rocking = (s.reference.as_ref())
+            .and_then(|r| r.rocking_stiffness(s.normal_stiffness))
             .filter(|_| !ball)
             .map_or(Matrix::ZERO, |k| turn * k * turn.transpose());
         springs.push(Spring {
@@ -273,7 +271,7 @@ fn assemble(contacts: &DiscreteContacts, world: &PhysicsWorld, spring: bool) -> 
                 points[0] - ma.kinematics.center_of_mass,
                 points[1] - mb.kinematics.center_of_mass,
             ],
-            normal: mb.pose.rotation * r.normal,
+            normal: mb.pose.rotation * frame.normal,
             normal_stiffness: s.normal_stiffness,
             tangential_stiffness: kappa * s.normal_stiffness,
             rocking,
@@ -362,12 +360,14 @@ mod tests {
         Material::new(1e7, 0.3).unwrap()
     }
 
-    /// Bodies stacked on a floor, each `2 h` above the last, left to settle: the world, the
-    /// drop-in and the bodies from the bottom up.
+    /// Bodies stacked on a floor, each `2 h` above the last, left to settle (on the grid, or
+    /// with the exact forms where they exist): the world, the drop-in and the bodies from the
+    /// bottom up.
     fn stack(
         colliders: &[ColliderBuilder],
         h: Real,
         law: TangentialLaw,
+        exact: bool,
     ) -> (PhysicsWorld, DiscreteContacts, Vec<RigidBodyHandle>) {
         let mut world = PhysicsWorld::new();
         world.integration_parameters.dt = engine_real(1e-3);
@@ -384,7 +384,10 @@ mod tests {
                 b
             })
             .collect();
-        let settings = OverlapSettings::new(4, IntegrationMode::Subcell).unwrap();
+        let settings = OverlapSettings::new(4, IntegrationMode::Subcell)
+            .unwrap()
+            .with_closed_form_spheres(exact)
+            .with_exact_polyhedra(exact);
         let mut contacts = DiscreteContacts::new(settings, 0.5)
             .unwrap()
             .with_friction(Friction::new(0.5, 0.4, 1e-3).unwrap())
@@ -427,7 +430,7 @@ mod tests {
     fn a_cube_on_a_floor_vibrates_as_its_spring_and_its_face_at_the_face_centre() {
         let h = 0.01;
         let cube = ColliderBuilder::cuboid(engine_real(h), engine_real(h), engine_real(h));
-        let (world, contacts, bodies) = stack(&[cube], h, TangentialLaw::Spring);
+        let (world, contacts, bodies) = stack(&[cube], h, TangentialLaw::Spring, false);
         let state = contact(&contacts, &world, Some(bodies[0]), None);
         let (k, d) = (state.normal_stiffness, state.reference.unwrap().indentation);
         let m = real(world.bodies[bodies[0]].mass());
@@ -452,45 +455,48 @@ mod tests {
 
     /// Two balls stacked on a floor, normal springs alone (the levers lie along the normals,
     /// so nothing turns): a chain of two masses whose highest `ω²` is
-    /// `(k₁ + 2k₂ + √(k₁² + 4k₂²)) / 2m`, above either contact's own `k/m*`.
+    /// `(k₁ + 2k₂ + √(k₁² + 4k₂²)) / 2m`, above either contact's own `k/m*` — on the grid and
+    /// with the balls' overlaps in closed form, which keep no geometry between evaluations.
     #[test]
     fn a_stack_vibrates_faster_than_either_of_its_contacts() {
-        let r = 0.01;
-        let ball = ColliderBuilder::ball(engine_real(r));
-        let (world, mut contacts, bodies) =
-            stack(&[ball.clone(), ball], r, TangentialLaw::SlipSpeed);
-        let k1 = contact(&contacts, &world, Some(bodies[0]), None).normal_stiffness;
-        let k2 = contact(&contacts, &world, Some(bodies[0]), Some(bodies[1])).normal_stiffness;
-        let m = real(world.bodies[bodies[0]].mass());
-        let chain = (k1 + 2.0 * k2 + (k1 * k1 + 4.0 * k2 * k2).sqrt()) / (2.0 * m);
-        let (omega2, pair) = highest_frequency(&contacts, &world, false).unwrap();
-        // Within the round-off of rapier's numbers (f32 in `rapier_f32`).
-        assert!((omega2 / chain - 1.0).abs() < 1e-6, "{omega2} against {chain}");
-        assert!(omega2 > (k1 / m).max(2.0 * k2 / m) * 1.05);
-        // The top mode moves the balls against each other: their contact holds most of it.
-        let body = |c: ColliderHandle| world.colliders[c].parent();
-        let named = [body(pair.0), body(pair.1)];
-        let balls = [Some(bodies[0]), Some(bodies[1])];
-        assert!(named == balls || named == [balls[1], balls[0]], "the balls' contact is named");
-        // The sub-step advice resolves the chain's half-period, which neither contact's own
-        // rule asks as much of. (Both contacts made far stiffer, so that no impact rule at
-        // rest speed asks more, and asked for a long step, so that the counts differ by more
-        // than their rounding.)
-        for state in contacts.states.values_mut() {
-            state.normal_stiffness *= 1e4;
+        for exact in [false, true] {
+            let r = 0.01;
+            let ball = ColliderBuilder::ball(engine_real(r));
+            let (world, mut contacts, bodies) =
+                stack(&[ball.clone(), ball], r, TangentialLaw::SlipSpeed, exact);
+            let k1 = contact(&contacts, &world, Some(bodies[0]), None).normal_stiffness;
+            let k2 = contact(&contacts, &world, Some(bodies[0]), Some(bodies[1])).normal_stiffness;
+            let m = real(world.bodies[bodies[0]].mass());
+            let chain = (k1 + 2.0 * k2 + (k1 * k1 + 4.0 * k2 * k2).sqrt()) / (2.0 * m);
+            let (omega2, pair) = highest_frequency(&contacts, &world, false).unwrap();
+            // Within the round-off of rapier's numbers (f32 in `rapier_f32`).
+            assert!((omega2 / chain - 1.0).abs() < 1e-6, "{omega2} against {chain} ({exact})");
+            assert!(omega2 > (k1 / m).max(2.0 * k2 / m) * 1.05);
+            // The top mode moves the balls against each other: their contact holds most of it.
+            let body = |c: ColliderHandle| world.colliders[c].parent();
+            let named = [body(pair.0), body(pair.1)];
+            let balls = [Some(bodies[0]), Some(bodies[1])];
+            assert!(named == balls || named == [balls[1], balls[0]], "the balls' contact named");
+            // The sub-step advice resolves the chain's half-period, which neither contact's own
+            // rule asks as much of. (Both contacts made far stiffer, so that no impact rule at
+            // rest speed asks more, and asked for a long step, so that the counts differ by
+            // more than their rounding.)
+            for state in contacts.states.values_mut() {
+                state.normal_stiffness *= 1e4;
+            }
+            let (omega2, _) = highest_frequency(&contacts, &world, false).unwrap();
+            let dt = 0.02;
+            let needed = |omega2: Real| {
+                (dt * omega2.sqrt() / core::f64::consts::PI * MIN_SUBSTEPS_PER_CONTACT).ceil()
+            };
+            let substeps = contacts.substeps(&world, engine_real(dt)).unwrap() as Real;
+            assert!(
+                substeps >= needed(omega2),
+                "{substeps} sub-steps for the chain's {} ({exact})",
+                needed(omega2)
+            );
+            assert!(needed(omega2) > needed(1e4 * (k1 / m).max(2.0 * k2 / m)));
         }
-        let (omega2, _) = highest_frequency(&contacts, &world, false).unwrap();
-        let dt = 0.02;
-        let needed = |omega2: Real| {
-            (dt * omega2.sqrt() / core::f64::consts::PI * MIN_SUBSTEPS_PER_CONTACT).ceil()
-        };
-        let substeps = contacts.substeps(&world, engine_real(dt)).unwrap() as Real;
-        assert!(
-            substeps >= needed(omega2),
-            "{substeps} sub-steps for the chain's {}",
-            needed(omega2)
-        );
-        assert!(needed(omega2) > needed(1e4 * (k1 / m).max(2.0 * k2 / m)));
     }
 
     /// A live contact whose stiffness is not finite (a force law that overflowed) is refused
@@ -499,7 +505,7 @@ mod tests {
     fn a_contact_stiffness_beyond_the_numbers_is_reported() {
         let r = 0.01;
         let ball = ColliderBuilder::ball(engine_real(r));
-        let (world, mut contacts, _) = stack(&[ball], r, TangentialLaw::Spring);
+        let (world, mut contacts, _) = stack(&[ball], r, TangentialLaw::Spring, false);
         for state in contacts.states.values_mut() {
             state.normal_stiffness = Real::INFINITY;
         }
@@ -524,7 +530,7 @@ mod tests {
         let cylinder = ColliderBuilder::cylinder(engine_real(h), engine_real(0.8 * h));
         let ball = ColliderBuilder::ball(engine_real(h));
         let bodies = [cube.clone(), cylinder.clone(), cube.clone(), cylinder, cube, ball];
-        let (world, contacts, _) = stack(&bodies, h, TangentialLaw::Spring);
+        let (world, contacts, _) = stack(&bodies, h, TangentialLaw::Spring, false);
         let network = assemble(&contacts, &world, true).unwrap();
         let n = 6 * network.bodies.len();
         assert_eq!(n, 36);

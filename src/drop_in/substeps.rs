@@ -21,12 +21,11 @@ impl DiscreteContacts {
     /// stiffer than the Hertz sphere of the bounding radii): each pair's normal half-period
     /// `π √(m*/k_n)`, and the half-period of the highest frequency of all of them together —
     /// a network of springs `k_n` along each normal and, with the spring, `κ k_n` across it,
-    /// at each contact point's levers, and each overlap's resistance to tilting where the
+    /// at each contact point's levers, and each kept overlap's resistance to tilting where the
     /// surfaces are nearly parallel, with every body's mass and inertia tensor (see `network`:
     /// a pile vibrates faster than any of its pairs, a face's contact under the centre slower
-    /// than a lever of the bounding radius would make it). A live contact whose
-    /// geometry is not kept (geometry reuse off, exact forms) counts its spring alone instead,
-    /// `π √(m_t/(κ k_n))`, as does every contact where no estimate comes out. These need stability
+    /// than a lever of the bounding radius would make it). Where no estimate comes out, each
+    /// live contact counts its spring alone instead, `π √(m_t/(κ k_n))`. These need stability
     /// and a steady hold, not a restitution's accuracy: each gets [`MIN_SUBSTEPS_PER_CONTACT`]
     /// sub-steps at the default [`SUBSTEPS_PER_CONTACT`], fewer in proportion when fewer sub-steps
     /// per contact are set, never fewer than [`STABLE_SUBSTEPS_PER_HALF_PERIOD`].
@@ -159,7 +158,7 @@ impl DiscreteContacts {
                     });
                 }
                 resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
-                let in_network = network.is_some() && s.reference.is_some();
+                let in_network = network.is_some() && s.frame.is_some();
                 if let Some((kappa, m_t)) = tangential.filter(|_| !in_network) {
                     resolve(core::f64::consts::PI * (m_t / (kappa * k_n)).sqrt());
                 }
