@@ -562,4 +562,45 @@ mod tests {
         assert!(omega2 <= top * (1.0 + 1e-9), "{omega2} above {top}");
         assert!(omega2 >= top * (1.0 - 1e-6), "{omega2} below {top}");
     }
+
+    /// Two balls pressed together across a periodic box's corner and the same pair inside the
+    /// box: each body's lever comes from its own pose (the two lie a box apart across the
+    /// faces), so the network and its highest frequency are the same.
+    #[test]
+    fn a_contact_across_periodic_faces_vibrates_as_inside_the_box() {
+        let (l, r) = (0.1, 0.01);
+        let offset = Vector::new(2.0, 0.3, 0.2).normalize() * (2.0 * r - 3e-4);
+        let mut estimates = Vec::new();
+        for a in [Vector::new(l - 0.004, l - 0.002, 0.05), Vector::new(0.05, 0.05, 0.05)] {
+            let b = a + offset;
+            let wrapped = b - Vector::new((b.x / l).floor() * l, (b.y / l).floor() * l, 0.0);
+            let mut world = PhysicsWorld::new();
+            world.gravity = engine_vector(Vector::ZERO);
+            world.integration_parameters.dt = engine_real(1e-4);
+            let domain =
+                crate::periodic::PeriodicBox::new(Vector::ZERO, Vector::splat(l), [true; 3])
+                    .unwrap();
+            let settings = OverlapSettings::new(4, IntegrationMode::Subcell).unwrap();
+            let mut contacts = DiscreteContacts::new(settings, 0.5)
+                .unwrap()
+                .with_friction(Friction::new(0.5, 0.4, 1e-3).unwrap())
+                .with_periodic(domain);
+            for (at, spin) in [(a, Vector::new(0.0, 0.0, 3.0)), (wrapped, Vector::ZERO)] {
+                let body = world.insert_body(
+                    RigidBodyBuilder::dynamic()
+                        .translation(engine_vector(at))
+                        .angvel(engine_vector(spin)),
+                );
+                let ball = ColliderBuilder::ball(engine_real(r)).density(engine_real(DENSITY));
+                let c = world.insert_collider(ball, Some(body));
+                contacts.handle(&mut world, c, material()).unwrap();
+            }
+            contacts.step(&mut world).unwrap();
+            assert_eq!(contacts.contact_count(), 1, "the pair touches");
+            estimates.push(highest_frequency(&contacts, &world, true).unwrap().0);
+        }
+        let [across, inside] = [estimates[0], estimates[1]];
+        // Within the round-off of rapier's numbers (f32 in `rapier_f32`).
+        assert!((across / inside - 1.0).abs() < 1e-5, "across {across}, inside {inside}");
+    }
 }
