@@ -89,8 +89,8 @@ pub struct ContactState {
     pub frame: Option<ContactFrame>,
 }
 
-/// A contact's point as a material point of each body and its normal: where its spring joins
-/// the two bodies.
+/// A contact's point as a material point of each body, its normal and its resistance to
+/// tilting: where and how its spring joins the two bodies.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
 pub struct ContactFrame {
@@ -99,18 +99,48 @@ pub struct ContactFrame {
     pub anchors: [Vector; 2],
     /// Unit normal from B to A, in B's body frame.
     pub normal: Vector,
+    /// The overlap's resistance to tilting about the contact point, `K` (N·m/rad, B's body
+    /// frame): A turned by `θ` against B feels the couple `−K θ`. `K = (F/V) [n]ₓ S [n]ₓᵀ`,
+    /// `S` the footprint's second moment of area about the contact point: a tilt deepens the
+    /// overlap on one side, its centroid moves there by `S (θ × n) / V`, and the force `F` at
+    /// it turns A back (`k_n J/A` for a flat face pressed evenly, `J` its area's moment). A
+    /// point spring at the contact point leaves this out. Zero without a footprint
+    /// (closed-form spheres).
+    pub rocking: Matrix,
 }
 
 impl ContactFrame {
-    /// The frame of a contact at `contact_point` with `normal` (world) between A at `pose_a`
-    /// and B at `pose_b`.
-    fn new(contact_point: Vector, normal: Vector, pose_a: &Pose, pose_b: &Pose) -> Self {
+    /// The frame of an evaluation's geometry `g` (world frame), between A at `pose_a` and B at
+    /// `pose_b`, whose normal stiffness is `k_n`. The force `F` of its resistance to tilting
+    /// ([`rocking`](Self::rocking)) is the elastic force behind `k_n` (`2 d k_n / (1 + p)`, the
+    /// inverse of [`normal_stiffness`](crate::force::normal_stiffness) on the same geometry).
+    fn new(g: &OverlapGeometry, k_n: Real, pose_a: &Pose, pose_b: &Pose) -> Self {
+        let (x, n) = (g.contact_point, g.normal);
+        let rocking = g.footprint.map_or(Matrix::ZERO, |f| {
+            let offset = f.centroid - x - n * n.dot(f.centroid - x);
+            let spread = f.spread
+                + Matrix::from_cols(offset * offset.x, offset * offset.y, offset * offset.z)
+                    * f.area;
+            let p = crate::force::volume_exponent(g.volume, g.indentation, g.surface_area)
+                .clamp(1.0, 2.0);
+            let force = 2.0 * g.indentation * k_n / (1.0 + p);
+            // `[n]ₓ`, the cross product with `n` as a matrix (columns `n × eᵢ`), in B's frame.
+            let n = pose_b.rotation.inverse() * n;
+            let turn = Matrix::from_quat(pose_b.rotation);
+            let cross =
+                Matrix::from_cols(n.cross(Vector::X), n.cross(Vector::Y), n.cross(Vector::Z));
+            let k =
+                cross * (turn.transpose() * spread * turn) * cross.transpose() * (force / g.volume);
+            if k.is_finite() {
+                k
+            } else {
+                Matrix::ZERO
+            }
+        });
         Self {
-            anchors: [
-                pose_a.inverse_transform_point(contact_point),
-                pose_b.inverse_transform_point(contact_point),
-            ],
-            normal: pose_b.rotation.inverse() * normal,
+            anchors: [pose_a.inverse_transform_point(x), pose_b.inverse_transform_point(x)],
+            normal: pose_b.rotation.inverse() * n,
+            rocking,
         }
     }
 }
@@ -463,33 +493,6 @@ impl Reference {
     /// not along the line of the centres.
     fn material_shift(&self, motion: &Pose) -> Vector {
         motion.transform_point(self.contact_point) - self.contact_point
-    }
-
-    /// The overlap's resistance to tilting about the contact point (N·m/rad, B's frame), for a
-    /// contact whose normal stiffness is `normal_stiffness`: the torque on A per radian that A
-    /// turns against B, `K θ` with `K = (F/V) [n]ₓ S [n]ₓᵀ`, `S` the footprint's second moment
-    /// of area about the contact point. A tilt `θ` deepens the overlap on one side, its
-    /// centroid moves there by `S (θ × n) / V` ([`tilted`](Self::tilted), the updates follow
-    /// it), and the force `F` at it turns A back: a point spring at the contact point leaves
-    /// this out. `F` is the elastic force behind the stiffness (`2 d k_n / (1 + p)`, see
-    /// [`normal_stiffness`](crate::force::normal_stiffness)). `None` where an update does not
-    /// follow a tilt by the footprint (surfaces at an angle, no footprint).
-    pub(crate) fn rocking_stiffness(&self, normal_stiffness: Real) -> Option<Matrix> {
-        if !self.parallel() {
-            return None;
-        }
-        let f = self.footprint?;
-        let offset = self.in_plane(f.centroid - self.contact_point);
-        let spread = f.spread
-            + Matrix::from_cols(offset * offset.x, offset * offset.y, offset * offset.z) * f.area;
-        let p = crate::force::volume_exponent(self.volume, self.indentation, self.surface_area)
-            .clamp(1.0, 2.0);
-        let force = 2.0 * self.indentation * normal_stiffness / (1.0 + p);
-        let n = self.normal;
-        // `[n]ₓ`, the cross product with `n` as a matrix (columns `n × eᵢ`).
-        let cross = Matrix::from_cols(n.cross(Vector::X), n.cross(Vector::Y), n.cross(Vector::Z));
-        let k = cross * spread * cross.transpose() * (force / self.volume);
-        k.is_finite().then_some(k)
     }
 
     /// Whether the surfaces at the contact point are nearly parallel (the in-plane part of the
@@ -1109,8 +1112,7 @@ impl ContactModel {
             s.tangential.sliding,
         );
         s.normal_stiffness = force.stiffness;
-        s.frame =
-            Some(ContactFrame::new(geometry.contact_point, geometry.normal, &a.pose, &b.pose));
+        s.frame = Some(ContactFrame::new(&geometry, force.stiffness, &a.pose, &b.pose));
         if self.params.tangential == crate::TangentialLaw::Spring {
             s.tangential.record(
                 spring.displacement,

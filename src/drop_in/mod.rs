@@ -414,12 +414,13 @@ impl DiscreteContacts {
             .insert(collider, Handled { shape, material, centre, radius, half_size, user_filter });
         self.queries.insert(collider, query);
         // A gap measured for another shape or size bounds nothing now, nor does a live
-        // contact's last full geometry.
+        // contact's last full geometry, nor where its last evaluation put it.
         self.gaps.clear();
         for (_, state) in
             self.states.iter_mut().filter(|((a, b), _)| *a == collider || *b == collider)
         {
             state.reference = None;
+            state.frame = None;
         }
         self.generation += 1;
     }

@@ -2,23 +2,24 @@
 //! vibration frequency: what an explicit sub-step must resolve once bodies rest on each other.
 //!
 //! Each live contact couples its two bodies at its contact point by its normal stiffness
-//! `k_n` along the normal and, with the tangential spring, `κ k_n` across it; where the
-//! surfaces are nearly parallel, also by the overlap's resistance to tilting
-//! ([`Reference::rocking_stiffness`](crate::contact::Reference)), which a point spring leaves
-//! out. A body's translation and turning both move its contact points, so a body with several
-//! contacts vibrates in modes that no pair alone shows: a pile's highest frequency may lie
-//! above every pair's own (a chain of equal bodies reaches twice one pair's `ω²`), or below a
-//! pair's bound taken at the bounding radius (a contact under a face's centre has a short
-//! lever).
+//! `k_n` along the normal and, with the tangential spring, `κ k_n` across it, and by the
+//! overlap's resistance to tilting ([`ContactFrame::rocking`](crate::contact::ContactFrame)),
+//! which a point spring leaves out. A body's translation and turning both move its contact
+//! points, so a body with several contacts vibrates in modes that no pair alone shows: a
+//! pile's highest frequency may lie above every pair's own (a chain of equal bodies reaches
+//! twice one pair's `ω²`), or below a pair's bound taken at the bounding radius (a contact
+//! under a face's centre has a short lever).
 //!
 //! The network's `ω²_max`, the largest eigenvalue of `M⁻¹K`, is found by the Lanczos process
 //! in the mass-weighted inner product (`M⁻¹K` is self-adjoint in it), from a fixed start, with
 //! momenta and velocities side by side so that no inertia tensor is inverted: after
-//! [`ITERATIONS`] steps the largest eigenvalue of the tridiagonal matrix it builds lies within
-//! round-off of `ω²_max` unless the top of the spectrum is crowded, and never above it. The
-//! sub-step's margin below explicit integration's limit ([`STABLE_SUBSTEPS_PER_HALF_PERIOD`]
-//! sub-steps per half-period at least) is left for what a linear network does not hold: the
-//! stiffness's rise within a step and the damping.
+//! [`ITERATIONS`] steps the largest eigenvalue of the tridiagonal matrix it builds never lies
+//! above `ω²_max` and comes to it far faster than power iteration's Rayleigh quotient (to
+//! round-off on the tests' networks; how close on a pile of hundreds of bodies depends on the
+//! gap below the top of its spectrum). The sub-step's margin below explicit integration's
+//! limit ([`STABLE_SUBSTEPS_PER_HALF_PERIOD`] sub-steps per half-period at least) covers what
+//! is left, and what a linear network does not hold: the stiffness's rise within a step and
+//! the damping.
 //!
 //! Contacts are taken in the order of their collider handles, so the estimate does not depend
 //! on the order of the contact map (a resumed run gives the same sub-steps).
@@ -136,7 +137,8 @@ fn add_scaled(y: &mut [Motion], a: Real, x: &[Motion]) {
 }
 
 /// The network's highest `ω²` (1/s²) and the pair that carries most of that mode's energy;
-/// `None` without a live contact between moving bodies.
+/// `None` without a live contact between moving bodies, or where the network degenerates (a
+/// non-finite or no positive stiffness).
 pub(super) fn highest_frequency(
     contacts: &DiscreteContacts,
     world: &PhysicsWorld,
@@ -257,14 +259,12 @@ fn assemble(contacts: &DiscreteContacts, world: &PhysicsWorld, spring: bool) -> 
         }
         let (ha, hb) = (&contacts.handled[&ca], &contacts.handled[&cb]);
         let kappa = if spring { stiffness_ratio(&ha.material, &hb.material) } else { 0.0 };
-        // A ball turning about its centre moves no surface: it resists no tilt.
+        // A ball turning about its centre moves no surface: it resists no tilt (what its cap's
+        // footprint would give is the normal force's moment about the contact point, which the
+        // lever already holds).
         let ball = ha.shape.sphere_radius().is_some() || hb.shape.sphere_radius().is_some();
         let turn = Matrix::from_quat(mb.pose.rotation);
-        // Only a kept geometry (geometry reuse on, no exact form) knows the footprint.
-        let rocking = (s.reference.as_ref())
-            .and_then(|r| r.rocking_stiffness(s.normal_stiffness))
-            .filter(|_| !ball)
-            .map_or(Matrix::ZERO, |k| turn * k * turn.transpose());
+        let rocking = if ball { Matrix::ZERO } else { turn * frame.rocking * turn.transpose() };
         springs.push(Spring {
             bodies: ends,
             levers: [
@@ -317,8 +317,9 @@ fn largest_eigenvalue(alpha: &[Real], beta: &[Real]) -> Real {
     hi
 }
 
-/// The unit eigenvector of the symmetric tridiagonal matrix (`alpha`, `beta`) for its
-/// eigenvalue `lambda`, by two rounds of inverse iteration.
+/// An eigenvector of the symmetric tridiagonal matrix (`alpha`, `beta`) for its largest
+/// eigenvalue `lambda` (from above, so every pivot of `T − λ I` is negative), by two rounds of
+/// inverse iteration, scaled to unit length (all ones where the elimination fails).
 fn eigenvector(alpha: &[Real], beta: &[Real], lambda: Real) -> Vec<Real> {
     let m = alpha.len();
     let tiny = Real::EPSILON * lambda.abs().max(Real::MIN_POSITIVE);
@@ -330,7 +331,7 @@ fn eigenvector(alpha: &[Real], beta: &[Real], lambda: Real) -> Vec<Real> {
             let below = if i > 0 { beta[i - 1] } else { 0.0 };
             let mut pivot = alpha[i] - lambda - if i > 0 { below * c[i - 1] } else { 0.0 };
             if pivot.abs() < tiny {
-                pivot = tiny;
+                pivot = -tiny;
             }
             c[i] = if i < beta.len() { beta[i] / pivot } else { 0.0 };
             y[i] = (x[i] - if i > 0 { below * y[i - 1] } else { 0.0 }) / pivot;
@@ -428,29 +429,33 @@ mod tests {
     /// radius `√3 h` as the lever would give, and above the point spring's `κ k (1/m + ℓ²/I)`.
     #[test]
     fn a_cube_on_a_floor_vibrates_as_its_spring_and_its_face_at_the_face_centre() {
-        let h = 0.01;
-        let cube = ColliderBuilder::cuboid(engine_real(h), engine_real(h), engine_real(h));
-        let (world, contacts, bodies) = stack(&[cube], h, TangentialLaw::Spring, false);
-        let state = contact(&contacts, &world, Some(bodies[0]), None);
-        let (k, d) = (state.normal_stiffness, state.reference.unwrap().indentation);
-        let m = real(world.bodies[bodies[0]].mass());
-        let inertia = m * (2.0 * h).powi(2) / 6.0;
-        let kt = stiffness_ratio(&material(), &material()) * k;
-        let mode = |lever: Real, rocking: Real| {
-            let (a, c) = (kt / m, (kt * lever * lever + rocking) / inertia);
-            let b = kt * lever / (m * inertia).sqrt();
-            0.5 * (a + c) + (0.25 * (a - c).powi(2) + b * b).sqrt()
-        };
-        let rocking = k * h * h / 3.0;
-        let (low, high) = (mode(h - d, rocking * (1.0 - d / (2.0 * h))), mode(h, rocking));
-        let (omega2, _) = highest_frequency(&contacts, &world, true).unwrap();
-        assert!(low > k / m, "the sliding and rocking mode is the highest");
-        assert!(
-            omega2 >= low * (1.0 - 1e-6) && omega2 <= high * (1.0 + 1e-6),
-            "{omega2} outside [{low}, {high}]"
-        );
-        assert!(omega2 > 1.1 * kt * (1.0 / m + h * h / inertia), "the face's tilt counts");
-        assert!(omega2 < 0.6 * mode(3.0_f64.sqrt() * h, 0.0));
+        // On the grid and as exact polyhedra (no geometry kept between evaluations).
+        for exact in [false, true] {
+            let h = 0.01;
+            let cube = ColliderBuilder::cuboid(engine_real(h), engine_real(h), engine_real(h));
+            let (world, contacts, bodies) = stack(&[cube], h, TangentialLaw::Spring, exact);
+            let k = contact(&contacts, &world, Some(bodies[0]), None).normal_stiffness;
+            // The cube's centre lies `h − d` above the floor.
+            let d = h - real(world.bodies[bodies[0]].translation().y);
+            let m = real(world.bodies[bodies[0]].mass());
+            let inertia = m * (2.0 * h).powi(2) / 6.0;
+            let kt = stiffness_ratio(&material(), &material()) * k;
+            let mode = |lever: Real, rocking: Real| {
+                let (a, c) = (kt / m, (kt * lever * lever + rocking) / inertia);
+                let b = kt * lever / (m * inertia).sqrt();
+                0.5 * (a + c) + (0.25 * (a - c).powi(2) + b * b).sqrt()
+            };
+            let rocking = k * h * h / 3.0;
+            let (low, high) = (mode(h - d, rocking * (1.0 - d / (2.0 * h))), mode(h, rocking));
+            let (omega2, _) = highest_frequency(&contacts, &world, true).unwrap();
+            assert!(low > k / m, "the sliding and rocking mode is the highest");
+            assert!(
+                omega2 >= low * (1.0 - 1e-6) && omega2 <= high * (1.0 + 1e-6),
+                "{omega2} outside [{low}, {high}] ({exact})"
+            );
+            assert!(omega2 > 1.1 * kt * (1.0 / m + h * h / inertia), "the face's tilt counts");
+            assert!(omega2 < 0.6 * mode(3.0_f64.sqrt() * h, 0.0));
+        }
     }
 
     /// Two balls stacked on a floor, normal springs alone (the levers lie along the normals,

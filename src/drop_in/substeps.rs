@@ -21,8 +21,8 @@ impl DiscreteContacts {
     /// stiffer than the Hertz sphere of the bounding radii): each pair's normal half-period
     /// `π √(m*/k_n)`, and the half-period of the highest frequency of all of them together —
     /// a network of springs `k_n` along each normal and, with the spring, `κ k_n` across it,
-    /// at each contact point's levers, and each kept overlap's resistance to tilting where the
-    /// surfaces are nearly parallel, with every body's mass and inertia tensor (see `network`:
+    /// at each contact point's levers, and each overlap's resistance to tilting, with every
+    /// body's mass and inertia tensor (see `network`:
     /// a pile vibrates faster than any of its pairs, a face's contact under the centre slower
     /// than a lever of the bounding radius would make it). Where no estimate comes out, each
     /// live contact counts its spring alone instead, `π √(m_t/(κ k_n))`. These need stability
@@ -147,16 +147,18 @@ impl DiscreteContacts {
             // on a face): its own stiffness's half-periods, normal and tangential, count too.
             // A contact of the network (below) has its spring resolved there, with the levers it
             // has and the other contacts of its bodies.
+            // A stiffness beyond the numbers (the force law overflowed) would ask for no
+            // sub-step at all.
+            if let Some(k_n) =
+                self.contact(ca, cb).map(|s| s.normal_stiffness).filter(|k| !k.is_finite())
+            {
+                return Err(Error::NonFinite {
+                    what: "normal stiffness of a live contact",
+                    detail: format!("{k_n} N/m between {}", named((ca, cb))),
+                });
+            }
             if let Some(s) = self.contact(ca, cb).filter(|s| s.normal_stiffness > 0.0) {
                 let k_n = s.normal_stiffness;
-                // A stiffness beyond the numbers (the force law overflowed) would ask for no
-                // sub-step at all.
-                if !k_n.is_finite() {
-                    return Err(Error::NonFinite {
-                        what: "normal stiffness of a live contact",
-                        detail: format!("{k_n} N/m between {}", named((ca, cb))),
-                    });
-                }
                 resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
                 let in_network = network.is_some() && s.frame.is_some();
                 if let Some((kappa, m_t)) = tangential.filter(|_| !in_network) {
