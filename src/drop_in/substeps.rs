@@ -113,7 +113,8 @@ impl DiscreteContacts {
             let spacing = coordinate_spacing(largest, boundary::EPSILON);
             // The impact to resolve: a live contact's is the one it began with (it slows
             // through every speed down to zero at its deepest), a pair apart's its approach now.
-            let impact = self.contact(ca, cb).map_or(approach, |s| s.reference_approach_speed);
+            let live = self.contact(ca, cb);
+            let impact = live.map_or(approach, |s| s.reference_approach_speed);
             if impact >= AT_REST_SPEED && coarsest.as_ref().is_none_or(|c| impact / spacing < c.0) {
                 coarsest = Some((impact / spacing, impact, largest, spacing, (ca, cb)));
             }
@@ -149,15 +150,13 @@ impl DiscreteContacts {
             // has and the other contacts of its bodies.
             // A stiffness beyond the numbers (the force law overflowed) would ask for no
             // sub-step at all.
-            if let Some(k_n) =
-                self.contact(ca, cb).map(|s| s.normal_stiffness).filter(|k| !k.is_finite())
-            {
+            if let Some(k_n) = live.map(|s| s.normal_stiffness).filter(|k| !k.is_finite()) {
                 return Err(Error::NonFinite {
                     what: "normal stiffness of a live contact",
                     detail: format!("{k_n} N/m between {}", named((ca, cb))),
                 });
             }
-            if let Some(s) = self.contact(ca, cb).filter(|s| s.normal_stiffness > 0.0) {
+            if let Some(s) = live.filter(|s| s.normal_stiffness > 0.0) {
                 let k_n = s.normal_stiffness;
                 resolve(core::f64::consts::PI * (m_star / k_n).sqrt());
                 let in_network = network.is_some() && s.frame.is_some();
