@@ -14,10 +14,13 @@
 //!
 //! Unlike rays or samples along grid lines, the planes see a thin wedge's tapering ends
 //! wherever they lie, whatever the aspect ratio of the overlap.
+//!
+//! `P` is cut with [`crease`](super::crease)'s clip, the one the bent cells use: each vertex
+//! stored once (so the extreme vertices come without duplicates), in buffers kept per thread.
 
 use parry3d_f64::bounding_volume::Aabb;
 
-use super::polyhedra::{clip, start_box, Face};
+use super::crease::{Plane, Scratch};
 use super::Pair;
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
@@ -29,8 +32,8 @@ const ROUNDS: usize = 24;
 /// it): `None` when the cuts prove the bodies apart. `hint` — last sub-step's box of the
 /// same pair, or nothing — only adds the first cuts near where the overlap was; the result is
 /// conservative whatever it is. The rounds stop when the last one moved no bound by more than
-/// a quarter of a grid cell (`n` cells will be laid on the box), or after `ROUNDS`: the box
-/// may then be a little loose, never short.
+/// a quarter of a grid cell (`n` cells will be laid on the box), or after `ROUNDS`, or when
+/// `P` would outgrow the clip's buffers: the box may then be a little loose, never short.
 pub(super) fn overlap_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     rough: &Aabb,
@@ -41,32 +44,50 @@ pub(super) fn overlap_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     if !(size.is_finite() && size > 0.0) {
         return Some(*rough);
     }
-    let tol = 1e-12 * size;
+    let mut scratch = Scratch::take();
+    let bounds = search(pair, rough, hint, n, size, &mut scratch);
+    if std::env::var("DC_DEBUG").is_ok() {
+        eprintln!("rough {:?} -> {:?}", rough, bounds);
+    }
+    scratch.give_back();
+    bounds
+}
+
+/// [`overlap_box`]'s search with the clip's buffers, the rough box's diagonal `size` positive.
+fn search<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pair: &Pair<'_, A, B>,
+    rough: &Aabb,
+    hint: Option<&Aabb>,
+    n: usize,
+    size: Real,
+    p: &mut Scratch,
+) -> Option<Aabb> {
     // Moves each plane out a little: the gradient of a user SDF may be a finite difference.
     let margin = 1e-9 * size;
-    let mut faces = start_box(rough.mins, rough.maxs);
+    p.start_box(rough.mins, rough.maxs);
     // The cut at `x` by the body that `x` lies farther outside (both when the two agree):
     // a choice by the geometry, so the planes do not depend on which body is called A.
-    let cut = |faces: &mut Vec<Face>, x: Vector| -> bool {
+    // `Some(whether it cut)`, `None` when `P` would outgrow the buffers (left as it was).
+    let cut = |p: &mut Scratch, x: Vector| -> Option<bool> {
         let (da, db) = pair.both(x);
         let mut any = false;
-        for s in [0, 1] {
-            let (d, other) = if s == 0 { (da, db) } else { (db, da) };
+        for body in [0, 1] {
+            let (d, other) = if body == 0 { (da, db) } else { (db, da) };
             if d <= margin || d < other {
                 continue;
             }
-            let g = if s == 0 { pair.a.gradient(x) } else { pair.b.gradient(x) };
+            let g = if body == 0 { pair.a.gradient(x) } else { pair.b.gradient(x) };
             let g = g.normalize_or_zero();
             if g == Vector::ZERO || !g.is_finite() {
                 continue;
             }
-            clip(faces, g, g.dot(x) - d + margin, tol);
+            p.cut(Plane { n: g, h: g.dot(x) - d + margin, body })?;
             any = true;
-            if faces.is_empty() {
+            if p.current_vertices().is_empty() {
                 break;
             }
         }
-        any
+        Some(any)
     };
     if let Some(h) = hint {
         // Corners of the hint box grown by half: outside the overlap, near it.
@@ -78,22 +99,27 @@ pub(super) fn overlap_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
                 if c & 2 == 0 { lo.y } else { hi.y },
                 if c & 4 == 0 { lo.z } else { hi.z },
             );
-            cut(&mut faces, x);
-            if faces.is_empty() {
+            if cut(p, x).is_none() {
+                return extent(p.current_vertices());
+            }
+            if p.current_vertices().is_empty() {
                 return None;
             }
         }
     }
-    let mut bounds = extent(&faces)?;
+    let mut bounds = extent(p.current_vertices())?;
+    let mut points = Vec::with_capacity(8);
     for _ in 0..ROUNDS {
         let mut cuts = false;
-        for x in extremes(&faces, margin) {
-            cuts |= cut(&mut faces, x);
-            if faces.is_empty() {
+        extremes(p.current_vertices(), margin, &mut points);
+        for &x in &points {
+            let Some(cut) = cut(p, x) else { return extent(p.current_vertices()) };
+            cuts |= cut;
+            if p.current_vertices().is_empty() {
                 return None;
             }
         }
-        let next = extent(&faces)?;
+        let next = extent(p.current_vertices())?;
         let w = (next.maxs - next.mins) / (4.0 * n as Real);
         let moved = (bounds.mins - next.mins).abs().max((next.maxs - bounds.maxs).abs());
         bounds = next;
@@ -105,34 +131,34 @@ pub(super) fn overlap_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 }
 
 /// The box of the polytope's vertices.
-fn extent(faces: &[Face]) -> Option<Aabb> {
+fn extent(verts: &[Vector]) -> Option<Aabb> {
     let mut lo = Vector::splat(Real::INFINITY);
     let mut hi = Vector::splat(Real::NEG_INFINITY);
-    for v in faces.iter().flat_map(|f| f.verts.iter()) {
+    for v in verts {
         lo = lo.min(*v);
         hi = hi.max(*v);
     }
     (lo.cmple(hi).all()).then(|| Aabb::new(lo, hi))
 }
 
-/// The polytope's vertices extreme along each axis, lowest and highest, duplicates removed:
-/// all of those within `tie` of an extreme, so that a symmetric pair gets symmetric cuts
-/// (and a box symmetric to round-off) although clipping rounds mirror vertices differently.
-fn extremes(faces: &[Face], tie: Real) -> Vec<Vector> {
+/// Into `out`, the polytope's vertices extreme along each axis, lowest and highest,
+/// duplicates removed: all of those within `tie` of an extreme, so that a symmetric pair gets
+/// symmetric cuts (and a box symmetric to round-off) although clipping rounds mirror vertices
+/// differently.
+fn extremes(verts: &[Vector], tie: Real, out: &mut Vec<Vector>) {
     let mut best = [Real::INFINITY; 6];
-    for v in faces.iter().flat_map(|f| f.verts.iter()) {
+    for v in verts {
         for j in 0..3 {
             best[2 * j] = best[2 * j].min(v[j]);
             best[2 * j + 1] = best[2 * j + 1].min(-v[j]);
         }
     }
-    let mut out: Vec<Vector> = Vec::with_capacity(8);
-    for v in faces.iter().flat_map(|f| f.verts.iter()) {
+    out.clear();
+    for v in verts {
         if (0..3).any(|j| v[j] <= best[2 * j] + tie || -v[j] <= best[2 * j + 1] + tie)
             && !out.contains(v)
         {
             out.push(*v);
         }
     }
-    out
 }

@@ -8,6 +8,9 @@ use crate::shape::Sdf;
 /// `sin 22.5°`: a gradient component larger than this points to a neighbour along that axis.
 const SECTOR: Real = 0.382_683_432_365_089_8;
 
+/// Distance from a surface, per grid spacing, within which a node counts as on it.
+const SURFACE_TOL: Real = 1e-9;
+
 /// `grid` is the corrected box's grid with one extra node layer on every side; only the box's
 /// own nodes count for the volume.
 ///
@@ -20,9 +23,13 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     values: &[(Real, Real)],
 ) -> Integral {
     let n = grid.n;
+    // A node on a surface to round-off counts as inside (the bodies are closed): where a
+    // body's face lies on a node layer (a face on the box's boundary), the layer's distances
+    // are zero to round-off and would flip in or out with the last bit of the box.
+    let on = SURFACE_TOL * grid.h.min_element();
     let inside = |i: usize, j: usize, k: usize| {
         let (a, b) = values[grid.index(i, j, k)];
-        a.max(b) <= 0.0
+        a.max(b) <= on
     };
     let mut count = 0usize;
     let mut sum = Vector::ZERO;

@@ -204,6 +204,33 @@ impl Scratch {
         facets(&self.polys[self.current], measure)
     }
 
+    /// Starts a polyhedron as the box `lo`–`hi`, to be cut by [`cut`](Self::cut) plane by
+    /// plane (a cutting-plane search; cells go through [`clip_cell`]).
+    pub(super) fn start_box(&mut self, lo: Vector, hi: Vector) {
+        self.tol = tolerance(lo, hi);
+        self.current = 0;
+        cell_faces(lo, hi, &mut self.polys[0]);
+    }
+
+    /// Keeps the part of the current polyhedron with `plane.n·x <= plane.h`; `None` (the
+    /// polyhedron unchanged) when that would outgrow the buffers.
+    pub(super) fn cut(&mut self, plane: Plane) -> Option<()> {
+        if clip(self, plane)? {
+            self.current = 1 - self.current;
+        }
+        Some(())
+    }
+
+    /// The current polyhedron's distinct vertices; none once it is cut away.
+    pub(super) fn current_vertices(&self) -> &[Vector] {
+        let poly = &self.polys[self.current];
+        if poly.nf == 0 {
+            &[]
+        } else {
+            poly.verts()
+        }
+    }
+
     /// Gathers into `vertices` the distinct vertices of the last clip's polyhedron.
     pub(super) fn gather_vertices(&mut self) {
         let Self { polys, vertices, current, .. } = self;
@@ -639,7 +666,7 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
         cap.clear();
         let on = to.verts[..nv].iter().zip(on_plane.iter()).filter(|v| *v.1).map(|v| *v.0);
         cap.extend(on);
-        super::polyhedra::cap_polygon(cap, plane.n, tol);
+        cap_polygon(cap, plane.n, tol);
         // Each point is one of the vertices it was taken from.
         for x in cap.iter() {
             if let Some(v) = to.verts[..nv].iter().position(|y| y == x) {
@@ -699,6 +726,58 @@ fn chain(
         leaving[e.0 as usize] = GONE;
     }
     closed
+}
+
+/// A cut's cap from the points the clipped faces left on the plane normal to `n`: the distinct
+/// ones (within `4 tol`), ordered counter-clockwise about `n`.
+fn cap_polygon(points: &mut Vec<Vector>, n: Vector, tol: Real) {
+    let mut distinct = 0;
+    for i in 0..points.len() {
+        let p = points[i];
+        if !points[..distinct].iter().any(|q| (*q - p).length_squared() <= 16.0 * tol * tol) {
+            points[distinct] = p;
+            distinct += 1;
+        }
+    }
+    points.truncate(distinct);
+    if distinct >= 3 {
+        order_around(points, n);
+    }
+}
+
+/// Orders the points of a convex polygon in the plane normal to `n` counter-clockwise about
+/// `n`.
+fn order_around(points: &mut [Vector], n: Vector) {
+    let c = points.iter().copied().sum::<Vector>() / points.len() as Real;
+    let u = n.any_orthonormal_vector();
+    let v = n.cross(u);
+    // A pseudo-angle: in the same order as `atan2(y, x)` on (−π, π], without the atan2.
+    let angle = |p: &Vector| {
+        let (x, y) = ((*p - c).dot(u), (*p - c).dot(v));
+        let r = y / (x.abs() + y.abs());
+        if x >= 0.0 {
+            r
+        } else if y >= 0.0 {
+            2.0 - r
+        } else {
+            -2.0 - r
+        }
+    };
+    // Each point's angle once, not once per comparison.
+    const KEYED: usize = 32;
+    if points.len() <= KEYED {
+        let mut keys = [(0.0, Vector::ZERO); KEYED];
+        for (k, p) in keys.iter_mut().zip(points.iter()) {
+            *k = (angle(p), *p);
+        }
+        let keys = &mut keys[..points.len()];
+        keys.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        for (p, k) in points.iter_mut().zip(keys.iter()) {
+            *p = k.1;
+        }
+    } else {
+        points.sort_by(|a, b| angle(a).total_cmp(&angle(b)));
+    }
 }
 
 #[cfg(test)]
