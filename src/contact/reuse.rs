@@ -1,149 +1,13 @@
-//! Persistent contact state: a contact fixes its damping at first touch and carries its
-//! corrected box, its tangential spring's history and its last full geometry from one sub-step
-//! to the next until the bodies part.
-//!
-//! **Geometry reuse.** Between two sub-steps a resting or slowly rolling contact moves far less
-//! than one cell of its overlap grid, yet a full evaluation integrates the whole grid again.
-//! A live contact therefore keeps its last full geometry in B's frame ([`Reference`]) and,
-//! while the pair's relative motion since then stays small against the indentation and the
-//! grid spacing ([`ContactModel::with_geometry_reuse`]), updates it from that motion instead
-//! (less a body of revolution's turn about its own axis, which moves no surface: a cylinder
-//! rolling or spinning is the same body turned): the indentation by the approach (how far A's
-//! material at the contact point moved along the normal; a ball's centre, whose turning moves no
-//! surface), the volume along the overlap's own power law `V ∝ d^p` (a flat punch's `p = 1`, a
-//! cap's or an edge's 2, a corner's 3: the secant of the last two full evaluations, or at first the
-//! shape measure the stiffness uses) — or, for a ball against a ball, a half-space or a face (a
-//! lens or a cap), along the lens's exact law, the full evaluation scaled by the exact lens's
-//! volume and surface at the ball's depth then and now — the contact point as between two balls
-//! about the bodies' centres (a body flat at the contact — a face under a ball or a cylinder's side
-//! — as a half-space: the point goes with the curved body) and across the contact plane as a tilt
-//! of the surfaces moves the overlap's centroid (by the overlap's footprint,
-//! [`OverlapGeometry::footprint`], between nearly parallel surfaces; elsewhere — an edge or a
-//! corner in the overlap, surfaces at an angle — volume and centroid move as A's motion sweeps its
-//! surface through B, [`OverlapGeometry::flux`]), the normal as the surfaces' own normals at the
-//! contact point turn. First touch, a contact whose update would part the bodies, and any motion
-//! beyond the bound get a full evaluation. The rule reads only the contact's state, so results do
-//! not depend on the thread count and a checkpoint resumes bit-identically.
+//! Geometry reuse: what a live contact keeps of its last full evaluation ([`Reference`]), how
+//! an update follows the pair's small relative motion from it, and when the motion is too
+//! large and the next evaluation is full ([`Refresh`]). See the [module docs](super).
 
-use parry3d_f64::bounding_volume::Aabb;
-
+use super::BodyState;
 use crate::error::Result;
-use crate::force::{contact_force_with_history, BodyKinematics, ContactForce};
-use crate::material::PairParameters;
-use crate::math::{Matrix, Pose, Real, Rotation, Vector};
-use crate::overlap::{
-    compute_overlap, lens_measures, Flux, Footprint, OverlapGeometry, OverlapSettings,
-};
+use crate::math::{Pose, Real, Rotation, Vector};
+use crate::overlap::{lens_measures, Flux, Footprint, OverlapGeometry, OverlapSettings};
 use crate::shape::Sdf;
-use crate::tangential::TangentialHistory;
-
-/// A body as the contact sees it: shape, pose and motion.
-#[derive(Clone, Copy, Debug)]
-pub struct BodyState<'a, S: ?Sized> {
-    /// The body's SDF (body frame).
-    pub shape: &'a S,
-    /// Body frame → world.
-    pub pose: Pose,
-    /// Centre of mass and velocities (world).
-    pub kinematics: BodyKinematics,
-}
-
-impl<'a, S: ?Sized> BodyState<'a, S> {
-    /// A body at rest whose centre of mass is the origin of its frame.
-    pub fn at_rest(shape: &'a S, pose: Pose) -> Self {
-        Self { shape, pose, kinematics: BodyKinematics::at_rest(pose.translation) }
-    }
-
-    /// With velocities (m/s, rad/s) about the centre of mass.
-    pub fn moving(mut self, linvel: crate::math::Vector, angvel: crate::math::Vector) -> Self {
-        self.kinematics.linvel = linvel;
-        self.kinematics.angvel = angvel;
-        self
-    }
-}
-
-/// What a live contact remembers between sub-steps.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
-pub struct ContactState {
-    /// Damping constant `c` (s/m), fixed at first touch from the approach speed then (and
-    /// lowered if the contact is later driven faster, see [`ContactModel::evaluate`]).
-    pub damping: Real,
-    /// The approach speed `c` was set from (m/s): the first touch's, or a larger one seen
-    /// later.
-    pub reference_approach_speed: Real,
-    /// Last corrected overlap box (pair frame), the rough box of the next sub-step.
-    pub corrected_box: Aabb,
-    /// The tangential spring's history ([`TangentialLaw::Spring`](crate::TangentialLaw::Spring);
-    /// stays empty under the slip-speed law).
-    #[cfg_attr(feature = "checkpoint", serde(default))]
-    pub tangential: TangentialHistory,
-    /// Normal stiffness `dF_n/dd` at the last evaluation (N/m): what the time-step advice of
-    /// the live contact resolves.
-    #[cfg_attr(feature = "checkpoint", serde(default))]
-    pub normal_stiffness: Real,
-    /// The last full evaluation, while geometry reuse is on; `None` forces a full evaluation.
-    pub reference: Option<Reference>,
-    /// Where the last evaluation put the contact: what the sub-step advice of the drop-in
-    /// couples the bodies at (`None` before the first evaluation).
-    pub frame: Option<ContactFrame>,
-}
-
-/// A contact's point as a material point of each body, its normal and its resistance to
-/// tilting: where and how its spring joins the two bodies.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
-pub struct ContactFrame {
-    /// The contact point in A's body frame and in B's (m): through a periodic box's faces the
-    /// bodies' poses may lie a box apart, so each body's lever comes from its own.
-    pub anchors: [Vector; 2],
-    /// Unit normal from B to A, in B's body frame.
-    pub normal: Vector,
-    /// The overlap's resistance to tilting about the contact point, `K` (N·m/rad, B's body
-    /// frame): A turned by `θ` against B feels the couple `−K θ`. `K = (F/V) [n]ₓ S [n]ₓᵀ`,
-    /// `S` the footprint's second moment of area about the contact point: a tilt deepens the
-    /// overlap on one side, its centroid moves there by `S (θ × n) / V`, and the force `F` at
-    /// it turns A back (`k_n J/A` for a flat face pressed evenly, `J` its area's moment). A
-    /// point spring at the contact point leaves this out. Zero without a footprint
-    /// (closed-form spheres).
-    pub rocking: Matrix,
-}
-
-impl ContactFrame {
-    /// The frame of an evaluation's geometry `g` (world frame), between A at `pose_a` and B at
-    /// `pose_b`, whose normal stiffness is `k_n`. The force `F` of its resistance to tilting
-    /// ([`rocking`](Self::rocking)) is the elastic force behind `k_n` (`2 d k_n / (1 + p)`, the
-    /// inverse of [`normal_stiffness`](crate::force::normal_stiffness) on the same geometry).
-    fn new(g: &OverlapGeometry, k_n: Real, pose_a: &Pose, pose_b: &Pose) -> Self {
-        let (x, n) = (g.contact_point, g.normal);
-        let rocking = g.footprint.map_or(Matrix::ZERO, |f| {
-            let offset = f.centroid - x - n * n.dot(f.centroid - x);
-            let spread = f.spread
-                + Matrix::from_cols(offset * offset.x, offset * offset.y, offset * offset.z)
-                    * f.area;
-            let p = crate::force::volume_exponent(g.volume, g.indentation, g.surface_area)
-                .clamp(1.0, 2.0);
-            let force = 2.0 * g.indentation * k_n / (1.0 + p);
-            // `[n]ₓ`, the cross product with `n` as a matrix (columns `n × eᵢ`), in B's frame.
-            let n = pose_b.rotation.inverse() * n;
-            let turn = Matrix::from_quat(pose_b.rotation);
-            let cross =
-                Matrix::from_cols(n.cross(Vector::X), n.cross(Vector::Y), n.cross(Vector::Z));
-            let k =
-                cross * (turn.transpose() * spread * turn) * cross.transpose() * (force / g.volume);
-            if k.is_finite() {
-                k
-            } else {
-                Matrix::ZERO
-            }
-        });
-        Self {
-            anchors: [pose_a.inverse_transform_point(x), pose_b.inverse_transform_point(x)],
-            normal: pose_b.rotation.inverse() * n,
-            rocking,
-        }
-    }
-}
+use parry3d_f64::bounding_volume::Aabb;
 
 /// A full evaluation's geometry in B's body frame, with A's pose in that frame then: what the
 /// updates between full evaluations start from, and how far they may go.
@@ -290,9 +154,9 @@ impl Lens {
 impl Reference {
     /// The geometry after A moved (relative to B, now at `pose_b`) to `relative`, or why a
     /// full evaluation is needed instead: the motion exceeds the allowances of the reuse
-    /// `fraction` (see [`ContactModel::with_geometry_reuse`]), or the update lost the overlap.
+    /// `fraction` (see [`ContactModel::with_geometry_reuse`](super::ContactModel::with_geometry_reuse)), or the update lost the overlap.
     /// The poses are [`representative`](Self::representative)'s.
-    fn update<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pub(super) fn update<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         shapes: (&A, &B),
         relative: &Pose,
@@ -513,7 +377,7 @@ impl Reference {
     /// turn is no motion for an update: a cylinder spinning on its side does not lift off it,
     /// and one rolling on it slides as far. A body's turn since the reference is split into its
     /// twist about the axis and the rest (swing–twist); the twist is taken back.
-    fn representative<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    pub(super) fn representative<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         (a, b): (&A, &B),
         relative: &Pose,
@@ -667,113 +531,6 @@ fn glide<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         .unwrap_or(0.0)
 }
 
-/// The geometry with a ball's normal force along the ball's own normal and through its
-/// centre. Every normal of a sphere passes through its centre, so no pressure on it has a
-/// torque about it; and the overlap of a ball with a face or another ball is symmetric about
-/// the line from the other body's nearest point to the ball's centre, which is the other
-/// body's distance gradient there (between two balls, the line of their centres) — with an
-/// edge, about the plane through that line normal to the edge; at a corner that line is the
-/// direction in which the ball's depth is measured.
-/// The grid gives both to its discretisation error only, always to the same side of its cells:
-/// a fraction of a per cent of a cell off the centre, and a normal tilted by a few millionths,
-/// enough to roll a ball resting on a floor away, faster and faster. A ball's contact takes
-/// that normal and the point on that line nearest to the grid's contact point.
-fn through_ball_centres<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-    mut g: OverlapGeometry,
-    a: &BodyState<'_, A>,
-    b: &BodyState<'_, B>,
-) -> OverlapGeometry {
-    // The other body's distance gradient at `x` (world), out of it.
-    fn outwards<S: Sdf + ?Sized>(body: &BodyState<'_, S>, x: Vector) -> Vector {
-        body.pose.rotation * body.shape.gradient(body.pose.inverse_transform_point(x))
-    }
-    let (ball_a, ball_b) = (a.shape.sphere_radius().is_some(), b.shape.sphere_radius().is_some());
-    let (centre, normal) = match (ball_a, ball_b) {
-        (true, true) => (b.pose.translation, a.pose.translation - b.pose.translation),
-        (true, false) => (a.pose.translation, outwards(b, a.pose.translation)),
-        (false, true) => (b.pose.translation, -outwards(a, b.pose.translation)),
-        (false, false) => return g,
-    };
-    let normal = normal.normalize_or_zero();
-    if normal != Vector::ZERO && normal.is_finite() {
-        g.normal = normal;
-    }
-    g.contact_point = centre + g.normal * g.normal.dot(g.contact_point - centre);
-    g
-}
-
-/// The geometry with no moment of the normal force about the axis of a body of revolution
-/// ([`Sdf::revolution_axis`]): every normal of such a body lies in a plane through its axis
-/// (a cylinder's side and a capsule's pass through it, a cap's runs along it), so the pressure
-/// on it has no moment about the axis. The grid's contact point lies off that plane by its
-/// discretisation error, always to the same side of the grid's cells, and that moment would
-/// roll a cylinder lying on a floor away, ever faster. The contact point moves across the
-/// normal, by the least distance that puts it in the plane of the axis and the normal (in both
-/// planes, for two such bodies; on their mean where the two are nearly parallel and disagree)
-/// where the normal crosses the axis, and by less, as `sin²` of their angle, as the normal
-/// turns along the axis: the pressure on a cap runs along the axis and has no moment about it
-/// wherever it acts, and only the blended normal's small tilt from the axis would give the
-/// point's offset one — while that offset, across a face rocking on a face, is what rights
-/// it. Balls are left to [`through_ball_centres`]: a ball's line through its centre along the
-/// other body's gradient lies in that body's plane too.
-fn about_no_axis<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-    mut g: OverlapGeometry,
-    a: &BodyState<'_, A>,
-    b: &BodyState<'_, B>,
-) -> OverlapGeometry {
-    if a.shape.sphere_radius().is_some() || b.shape.sphere_radius().is_some() {
-        return g;
-    }
-    let n = g.normal;
-    // Per body with an axis not along the normal: the unit normal of the plane of its axis
-    // and the contact normal, and how far the contact point is to move towards that plane —
-    // all the way where the normal crosses the axis (a side), less as it turns along it
-    // (`sin²` of their angle): on a cap the pressure runs along the axis, whatever the
-    // blended normal's tilt, and a point off the plane has a moment only by that tilt.
-    let plane = |axis: Option<(Vector, Vector)>, pose: &Pose| {
-        let (point, direction) = axis?;
-        let m = n.cross(pose.rotation * direction);
-        let length = m.length();
-        (length > AXIS_ALONG_NORMAL).then(|| {
-            let off = (g.contact_point - pose.transform_point(point)).dot(m / length);
-            (m / length, off * length * length)
-        })
-    };
-    let shift = match (
-        plane(a.shape.revolution_axis(), &a.pose),
-        plane(b.shape.revolution_axis(), &b.pose),
-    ) {
-        (None, None) => return g,
-        (Some((m, off)), None) | (None, Some((m, off))) => -m * off,
-        (Some((m1, off1)), Some((m2, off2))) => {
-            // The least shift in the span of m1 and m2 that zeroes both offsets.
-            let (m2, off2) = if m1.dot(m2) < 0.0 { (-m2, -off2) } else { (m2, off2) };
-            let c = m1.dot(m2);
-            let det = 1.0 - c * c;
-            if det < PARALLEL_AXES {
-                -(m1 + m2).normalize_or_zero() * (0.5 * (off1 + off2))
-            } else {
-                let alpha = (-off1 + c * off2) / det;
-                let beta = (-off2 + c * off1) / det;
-                m1 * alpha + m2 * beta
-            }
-        }
-    };
-    if shift.is_finite() {
-        g.contact_point += shift;
-    }
-    g
-}
-
-/// `|n × a|` below which a body's axis `a` counts as along the contact normal `n`
-/// ([`about_no_axis`]): the normal force's moment about it is then nil (or the plane of the
-/// two ill-defined), and the contact point stays.
-const AXIS_ALONG_NORMAL: Real = 1e-6;
-
-/// `1 − cos²` of the angle between two bodies' planes ([`about_no_axis`]) below which they
-/// count as parallel: the contact point moves onto their mean.
-const PARALLEL_AXES: Real = 1e-6;
-
 /// How many times the approach allowance a lens's update may go ([`Reference::grown`]): it
 /// follows the lens's exact law, so its error is the grid's discretisation error at the last
 /// full evaluation carried to another depth.
@@ -843,7 +600,7 @@ fn volume_law(
     }
 }
 
-/// Checks a geometry reuse fraction (see [`ContactModel::with_geometry_reuse`]): the
+/// Checks a geometry reuse fraction (see [`ContactModel::with_geometry_reuse`](super::ContactModel::with_geometry_reuse)): the
 /// fraction itself, or [`Error::InvalidParameter`](crate::Error::InvalidParameter) naming
 /// `geometry_reuse` outside `0 <= fraction <= 100`.
 pub fn check_reuse(fraction: Real) -> Result<Real> {
@@ -858,13 +615,8 @@ struct Tilt {
     shift: Vector,
 }
 
-/// A's body frame in B's body frame.
-fn relative_pose(a: &Pose, b: &Pose) -> Pose {
-    b.inverse() * *a
-}
-
 /// Why an evaluation integrated the overlap in full rather than updating the last full
-/// geometry (see [`ContactModel::with_geometry_reuse`]).
+/// geometry (see [`ContactModel::with_geometry_reuse`](super::ContactModel::with_geometry_reuse)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Refresh {
     /// Geometry reuse is off, or the pair has an exact form, which costs less than an update.
@@ -940,201 +692,17 @@ impl core::fmt::Display for Refreshes {
     }
 }
 
-/// Geometry and force of one evaluation.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ContactOutput {
-    /// Overlap geometry; its contact point is where the normal force acts, moved off the
-    /// overlap's centroid for a ball (onto the line through its centre) and for a body of
-    /// revolution (into the plane of its axis and the normal), see
-    /// [`ContactModel::evaluate`].
-    pub geometry: OverlapGeometry,
-    /// Force and torques.
-    pub force: ContactForce,
-    /// Why the geometry was integrated in full; `None`: it was updated from the last full one.
-    pub refresh: Option<Refresh>,
-}
-
-impl ContactOutput {
-    /// Whether the geometry was integrated in full (`false`: updated from the last full one).
-    pub fn full(&self) -> bool {
-        self.refresh.is_some()
-    }
-}
-
-/// The geometry reuse fraction by default: the indentation may change by this fraction of
-/// itself, the contact travel by this fraction of a cell, between full evaluations (see
-/// [`ContactModel::with_geometry_reuse`]).
-pub const GEOMETRY_REUSE: Real = 0.25;
-
-/// The contact law for one kind of pair: force parameters plus overlap resolution.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ContactModel {
-    /// Force-law parameters.
-    pub params: PairParameters,
-    /// Overlap grid resolution and mode.
-    pub settings: OverlapSettings,
-    /// Geometry reuse fraction (0: every evaluation is full); private so that it stays checked.
-    reuse: Real,
-}
-
-impl ContactModel {
-    /// A model from checked parameters that evaluates every contact in full (geometry reuse
-    /// off; [`with_geometry_reuse`](Self::with_geometry_reuse) turns it on).
-    pub fn new(params: PairParameters, settings: OverlapSettings) -> Self {
-        Self { params, settings, reuse: 0.0 }
-    }
-
-    /// With geometry reuse at `fraction` (`0 <= fraction <= 100`; 0 turns reuse off): between
-    /// full evaluations a live contact's geometry is updated from the pair's relative motion
-    /// (see the module docs) while
-    /// - its local indentation changes by at most `fraction × d` — the approach at the
-    ///   contact point (A's material there, along the normal) plus half the tilt across the
-    ///   overlap (how far the surfaces' normals at the contact point turned, each on the face
-    ///   or smooth part it lay on at the full evaluation, so that crossing an edge's bisector
-    ///   is no tilt, times the corrected box's diagonal: an update follows a tilt to first
-    ///   order, and what it misses at that tilt is what the volume law misses at its own
-    ///   limit; eight times the tilt for a counted overlap, which it does not follow; none
-    ///   against a ball, which has no orientation); a lens or a cap, which an update follows
-    ///   by its exact law, by sixteen times that, and
-    /// - A's material point at the contact travels across the grid by at most
-    ///   `fraction × w / N_c`, `w` the corrected box's longest side — the tangential shift plus
-    ///   the roll's chord at the nearer body's bounding-sphere centre; a ball's cap on a face
-    ///   as far as the face is found to reach ([`Lens::glide`]).
-    ///
-    /// Beyond either, the next evaluation is full. Values above 1 let the geometry drift far
-    /// from what the grid gives; they exist to show that the bound matters.
-    pub fn with_geometry_reuse(mut self, fraction: Real) -> Result<Self> {
-        self.reuse = check_reuse(fraction)?;
-        Ok(self)
-    }
-
-    /// The geometry reuse fraction (see [`with_geometry_reuse`](Self::with_geometry_reuse)).
-    pub fn geometry_reuse(&self) -> Real {
-        self.reuse
-    }
-
-    /// Evaluates the pair and updates its persistent `state`: `None` → a new contact starts
-    /// (damping from the current approach speed); bodies apart → `state` is cleared and
-    /// `Ok(None)` returned. A live contact keeps its damping unless it approaches faster than
-    /// it did when `c` was set; then `c` is set anew from that speed.
-    ///
-    /// The normal force of a ball passes through its centre, and that of a body of revolution
-    /// ([`Sdf::revolution_axis`]) has no moment about its axis, as the pressure on such a body
-    /// has none: the contact point is moved across the normal where the grid's lies off by its
-    /// discretisation error (see `through_ball_centres` and `about_no_axis`).
-    pub fn evaluate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-        &self,
-        a: &BodyState<'_, A>,
-        b: &BodyState<'_, B>,
-        state: &mut Option<ContactState>,
-    ) -> Result<Option<ContactOutput>> {
-        a.kinematics.check("kinematics of body A")?;
-        b.kinematics.check("kinematics of body B")?;
-        let relative = relative_pose(&a.pose, &b.pose);
-        let updated = match state {
-            None => Err(Refresh::FirstTouch),
-            Some(s) => match &s.reference {
-                Some(r) if self.reuse > 0.0 => {
-                    let update = |relative: &Pose, pose_b: &Pose| {
-                        r.update((a.shape, b.shape), relative, pose_b, s.corrected_box, self.reuse)
-                    };
-                    // A body of revolution turned back about its axis first; where that moves
-                    // the contact beyond an allowance (a disc rolling on its rim carries its
-                    // contact point round with it, the turned-back one slides), the pair as it
-                    // is: either describes the same pair exactly.
-                    match r.representative((a.shape, b.shape), &relative, &b.pose) {
-                        Some((turned, pose_b)) => {
-                            update(&turned, &pose_b).or_else(|_| update(&relative, &b.pose))
-                        }
-                        None => update(&relative, &b.pose),
-                    }
-                }
-                _ => Err(Refresh::Off),
-            },
-        };
-        let refresh = updated.as_ref().err().copied();
-        let geometry = match updated {
-            Ok(g) => g,
-            Err(_) => {
-                let previous = state.as_ref().map(|s| s.corrected_box);
-                let Some(g) = compute_overlap(
-                    a.shape,
-                    &a.pose,
-                    b.shape,
-                    &b.pose,
-                    &self.settings,
-                    previous.as_ref(),
-                )?
-                else {
-                    *state = None;
-                    return Ok(None);
-                };
-                g
-            }
-        };
-        let geometry = about_no_axis(through_ball_centres(geometry, a, b), a, b);
-        let x = geometry.contact_point;
-        let approach =
-            -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
-        let s = state.get_or_insert_with(|| ContactState {
-            damping: self.params.damping_for(approach),
-            reference_approach_speed: approach,
-            corrected_box: geometry.corrected_box,
-            tangential: TangentialHistory::default(),
-            normal_stiffness: 0.0,
-            reference: None,
-            frame: None,
-        });
-        // In a binary impact the approach speed only falls after first touch. A contact that
-        // a third body drives faster (a pile, a contact begun while sliding) re-bases `c` on
-        // the larger speed, so `c ḋ` never exceeds `a(e)`: a contact begun at a crawl would
-        // otherwise multiply a later impact's force by `1 + a(e) ḋ / v_crawl` and explode.
-        if approach > s.reference_approach_speed.max(self.params.min_approach_speed) {
-            s.damping = self.params.damping_for(approach);
-            s.reference_approach_speed = approach;
-        }
-        if refresh.is_some() {
-            s.corrected_box = geometry.corrected_box;
-            // An exact form (closed-form spheres, exact polyhedra) costs less than an update.
-            let reuse = self.reuse > 0.0
-                && !crate::overlap::has_exact_form(a.shape, b.shape, &self.settings);
-            s.reference =
-                reuse.then(|| self.reference(relative, s.reference.as_ref(), a, b, &geometry));
-        }
-        let carried = s.tangential.carried(&a.pose, &b.pose, geometry.normal);
-        let (force, spring) = contact_force_with_history(
-            &self.params,
-            s.damping,
-            &geometry,
-            &a.kinematics,
-            &b.kinematics,
-            carried,
-            s.tangential.sliding,
-        );
-        s.normal_stiffness = force.stiffness;
-        s.frame = Some(ContactFrame::new(&geometry, force.stiffness, &a.pose, &b.pose));
-        if self.params.tangential == crate::TangentialLaw::Spring {
-            s.tangential.record(
-                spring.displacement,
-                spring.sliding,
-                geometry.contact_point,
-                &a.pose,
-                &b.pose,
-            );
-        }
-        Ok(Some(ContactOutput { geometry, force, refresh }))
-    }
-
-    /// What the updates until the next full evaluation start from (see
-    /// [`with_geometry_reuse`](Self::with_geometry_reuse) for the allowances).
-    fn reference<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-        &self,
+impl Reference {
+    /// What the updates until the next full evaluation start from, after the full evaluation
+    /// `g` (see [`ContactModel::with_geometry_reuse`](super::ContactModel::with_geometry_reuse) for the allowances).
+    pub(super) fn new<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        settings: &OverlapSettings,
         relative: Pose,
         previous: Option<&Reference>,
         a: &BodyState<'_, A>,
         b: &BodyState<'_, B>,
         g: &OverlapGeometry,
-    ) -> Reference {
+    ) -> Self {
         let sides = g.corrected_box.maxs - g.corrected_box.mins;
         let reach = sides.length();
         let (exponent, depth_rate) = volume_law(
@@ -1176,7 +744,7 @@ impl ContactModel {
         }
         let centres = [sphere_a.0, sphere_b.0];
         // A ball against a ball or a flat body: a lens, or a cap, of the ball's depth alone.
-        let enlargement = self.settings.enlargement();
+        let enlargement = settings.enlargement();
         let [eps_a, eps_b] = enlargement;
         let radii = match (a.shape.sphere_radius(), b.shape.sphere_radius()) {
             (Some(ra), Some(rb)) => Some([ra + eps_a, rb + eps_b]),
@@ -1210,7 +778,7 @@ impl ContactModel {
             depth_rate,
             reach,
             lever: r_a.min(r_b).max(reach),
-            cell: sides.max_element() / self.settings.n_c() as Real,
+            cell: sides.max_element() / settings.n_c() as Real,
             footprint: g.footprint.map(|f| f.transformed(&b.pose.inverse())),
             flux: g.flux.map(|f| f.transformed(&b.pose.inverse())),
         }
