@@ -579,11 +579,12 @@ fn overlap_in_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 /// searched box is: the pieces' box is tight where `bounds` is loose (a lens's rim), so the
 /// second grid is the finer one; its nodes do not lie on the pieces' extreme faces (a flat
 /// face there would lie on a node layer, where which cell's facet counts is decided by
-/// round-off). Where the pieces' box is `bounds` to within [`SAME_BOX`] of a cell on every
-/// side (the cutting planes met the overlap's extremes: flat faces, edges, a cylinder's rim),
-/// the second grid would be the first to that fraction of a cell, and the first's integral is
-/// kept, with `bounds` as the box the next sub-step follows (so that a contact at rest lays
-/// the same grid again).
+/// round-off). Where no side of the pieces' box lies more than [`SAME_BOX`] of a cell inside
+/// `bounds` (the cutting planes met the overlap's extremes: flat faces, edges, a cylinder's
+/// rim), the second grid would not be finer, and the first's integral is kept, with `bounds`
+/// as the box the next sub-step follows (so that a contact at rest lays the same grid again).
+/// Pieces beyond `bounds`, which holds all of the overlap, are the tangent planes' outer error
+/// in bent cells: a grid laid on their box would only be coarser.
 fn first_touch<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     bounds: &Aabb,
@@ -597,8 +598,8 @@ fn first_touch<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         subcell::integrate(pair, &padded, &padded.sample(pair, IntegrationMode::Subcell));
     let pieces = integral.bounds?;
     let slack = grid.h * SAME_BOX;
-    let same = (pieces.mins - bounds.mins).abs().cmple(slack).all()
-        && (pieces.maxs - bounds.maxs).abs().cmple(slack).all();
+    let same = (pieces.mins - bounds.mins).cmple(slack).all()
+        && (bounds.maxs - pieces.maxs).cmple(slack).all();
     if same {
         return finish(pair, integral, &grid, rough, *bounds);
     }
@@ -606,8 +607,8 @@ fn first_touch<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         .or_else(|| finish(pair, integral, &grid, rough, pieces))
 }
 
-/// How far (per cell) the pieces' box of a first touch may lie from its cutting-plane box on
-/// every side for the first grid's integral to stand ([`first_touch`]).
+/// How far (per cell) the pieces' box of a first touch may lie inside its cutting-plane box on
+/// any side for the first grid's integral to stand ([`first_touch`]).
 const SAME_BOX: Real = 1.0 / 16.0;
 
 /// A persistent sub-cell contact without a box search, on the grid a first touch builds from
