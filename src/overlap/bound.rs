@@ -16,7 +16,8 @@
 //! wherever they lie, whatever the aspect ratio of the overlap.
 //!
 //! `P` is cut with [`crease`](super::crease)'s clip, the one the bent cells use: each vertex
-//! stored once (so the extreme vertices come without duplicates), in buffers kept per thread.
+//! stored once, in buffers kept per thread. Where `P` would outgrow them, the rounds stop there
+//! (the box still holds the overlap).
 
 use parry3d_f64::bounding_volume::Aabb;
 
@@ -25,7 +26,7 @@ use super::Pair;
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
 
-/// Rounds of cuts at most (each clips `P` by up to six planes).
+/// Rounds of cuts at most (each clips `P` by the planes at its extreme vertices).
 const ROUNDS: usize = 24;
 
 /// The box of `A ∩ B` within `rough` (the conservative rough box of the pair, which contains
@@ -46,9 +47,6 @@ pub(super) fn overlap_box<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     }
     let mut scratch = Scratch::take();
     let bounds = search(pair, rough, hint, n, size, &mut scratch);
-    if std::env::var("DC_DEBUG").is_ok() {
-        eprintln!("rough {:?} -> {:?}", rough, bounds);
-    }
     scratch.give_back();
     bounds
 }

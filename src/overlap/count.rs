@@ -8,8 +8,13 @@ use crate::shape::Sdf;
 /// `sin 22.5°`: a gradient component larger than this points to a neighbour along that axis.
 const SECTOR: Real = 0.382_683_432_365_089_8;
 
-/// Distance from a surface, per grid spacing, within which a node counts as on it.
+/// Distance from a surface, per grid spacing, within which a node counts as on it (at least
+/// [`ROUND_OFF`]).
 const SURFACE_TOL: Real = 1e-9;
+
+/// Distance from a surface, per unit of the grid's coordinates, within which a node counts as
+/// on it: the round-off of a distance taken there.
+const ROUND_OFF: Real = 64.0 * Real::EPSILON;
 
 /// `grid` is the corrected box's grid with one extra node layer on every side; only the box's
 /// own nodes count for the volume.
@@ -26,7 +31,9 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     // A node on a surface to round-off counts as inside (the bodies are closed): where a
     // body's face lies on a node layer (a face on the box's boundary), the layer's distances
     // are zero to round-off and would flip in or out with the last bit of the box.
-    let on = SURFACE_TOL * grid.h.min_element();
+    // Round-off in a distance grows with the coordinates (the pair's frame), not with the cell.
+    let reach = grid.lo.abs().max((grid.lo + grid.h * n as Real).abs()).max_element();
+    let on = (SURFACE_TOL * grid.h.min_element()).max(ROUND_OFF * reach);
     let inside = |i: usize, j: usize, k: usize| {
         let (a, b) = values[grid.index(i, j, k)];
         a.max(b) <= on

@@ -36,16 +36,23 @@ pub(super) const MAX_PLANES: usize = 64;
 /// Faces at most: the cell's six and one per plane.
 const MAX_FACES: usize = 6 + MAX_PLANES;
 
+/// [`MAX_VERTS`] for the cutting-plane box's polytope ([`Scratch::start_box`]), which gains a
+/// face per cut over many rounds where the planes close in on a curved rim.
+const BOX_VERTS: usize = 1024;
+
+/// [`MAX_FACES`] for the cutting-plane box's polytope.
+const BOX_FACES: usize = 256;
+
 /// Vertices a polyhedron's buffer holds: a clip of one within the limits adds at most one
-/// per edge cut (`MAX_VERTS / 2` edges at most).
-const CAP_VERTS: usize = MAX_VERTS + MAX_VERTS / 2 + 8;
+/// per edge cut (`BOX_VERTS / 2` edges at most).
+const CAP_VERTS: usize = BOX_VERTS + BOX_VERTS / 2 + 8;
 
 /// Index entries a polyhedron's buffer holds: the clipped faces gain at most one each, and
 /// the cap takes at most one per vertex.
-const CAP_INDEX: usize = MAX_VERTS + MAX_FACES + CAP_VERTS + 8;
+const CAP_INDEX: usize = BOX_VERTS + BOX_FACES + CAP_VERTS + 8;
 
 /// Faces a polyhedron's buffer holds: the clipped ones and the cap.
-const CAP_FACES: usize = MAX_FACES + 1;
+const CAP_FACES: usize = BOX_FACES + 1;
 
 /// No vertex: a vertex the clip cut off.
 const GONE: u16 = u16::MAX;
@@ -154,6 +161,9 @@ pub(super) struct Scratch {
     current: usize,
     /// Distances from a plane below this count as on it (relative to the cell's size).
     tol: Real,
+    /// Vertex entries and faces the clipped polyhedron may have ([`MAX_VERTS`] and
+    /// [`MAX_FACES`] for a cell, more for the cutting-plane box).
+    limits: (usize, usize),
     /// The result's distinct vertices, gathered by [`Scratch::gather_vertices`].
     pub(super) vertices: Vec<Vector>,
     /// The planes [`clip_cell`] and [`clip_more`] clip by.
@@ -191,6 +201,7 @@ impl Scratch {
             cap: Vec::with_capacity(2 * MAX_FACES),
             current: 0,
             tol: 0.0,
+            limits: (MAX_VERTS, MAX_FACES),
             vertices: Vec::with_capacity(MAX_VERTS),
             planes: Vec::with_capacity(MAX_PLANES),
         }
@@ -208,6 +219,7 @@ impl Scratch {
     /// plane (a cutting-plane search; cells go through [`clip_cell`]).
     pub(super) fn start_box(&mut self, lo: Vector, hi: Vector) {
         self.tol = tolerance(lo, hi);
+        self.limits = (BOX_VERTS, BOX_FACES);
         self.current = 0;
         cell_faces(lo, hi, &mut self.polys[0]);
     }
@@ -221,7 +233,8 @@ impl Scratch {
         Some(())
     }
 
-    /// The current polyhedron's distinct vertices; none once it is cut away.
+    /// The current polyhedron's vertices (each stored once; one on the last plane may be left
+    /// on no face, within the clip's tolerance of the polyhedron); none once it is cut away.
     pub(super) fn current_vertices(&self) -> &[Vector] {
         let poly = &self.polys[self.current];
         if poly.nf == 0 {
@@ -293,6 +306,7 @@ pub(super) fn clip_cell(
     deepest_first: bool,
 ) -> Option<Measure> {
     scratch.tol = tolerance(lo, hi);
+    scratch.limits = (MAX_VERTS, MAX_FACES);
     scratch.current = 0;
     let poly = &mut scratch.polys[0];
     if excluded(&scratch.planes, lo, hi, 4.0 * scratch.tol) {
@@ -396,6 +410,7 @@ pub(super) fn clip_box(
     // No two-plane exclusion test first (as for a cell): it costs a pass over all pairs of
     // the bodies' faces, and the box holds the whole overlap, so it rarely excludes.
     scratch.tol = tolerance(lo, hi);
+    scratch.limits = (MAX_VERTS, MAX_FACES);
     scratch.current = 0;
     cell_faces(lo, hi, &mut scratch.polys[0]);
     let measure = clip_deepest_first(lo, hi, scratch)?;
@@ -507,7 +522,7 @@ fn cell_faces(lo: Vector, hi: Vector, poly: &mut Poly) {
 /// the plane (written into the other polyhedron); returns `Some(false)` (and changes nothing)
 /// when the plane cuts nothing off, `None` when the result would outgrow the buffers.
 fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
-    let Scratch { polys, links, cap, current, tol, .. } = scratch;
+    let Scratch { polys, links, cap, current, tol, limits, .. } = scratch;
     let Links { sides, class, kept, cut_edges, on_plane, cap_edges, leaving } = &mut **links;
     let tol = *tol;
     // Every vertex's side once: the faces below read it as bits.
@@ -681,7 +696,7 @@ fn clip(scratch: &mut Scratch, plane: Plane) -> Option<bool> {
         ni = start;
     }
     (to.nv, to.ni, to.nf) = (nv, ni, nf);
-    (ni <= MAX_VERTS && nf <= MAX_FACES).then_some(true)
+    (ni <= limits.0 && nf <= limits.1).then_some(true)
 }
 
 /// Appends to `out` (of length `len`) the cycle the cap's `edges` form, each vertex once,

@@ -128,7 +128,7 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
     }
 }
 
-/// The pair in one body's frame (A's or B's, see [`compute_overlap`]); `phi = max(d_A, d_B)`
+/// The pair in one body's frame (A's or B's, see [`compute_overlap`](super::compute_overlap)); `phi = max(d_A, d_B)`
 /// is negative inside the overlap.
 pub(crate) struct Pair<'a, A: ?Sized, B: ?Sized> {
     pub(super) a: Placed<'a, A>,
