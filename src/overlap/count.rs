@@ -32,7 +32,8 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     // body's face lies on a node layer (a face on the box's boundary), the layer's distances
     // are zero to round-off and would flip in or out with the last bit of the box.
     // Round-off in a distance grows with the coordinates (the pair's frame), not with the cell.
-    let reach = grid.lo.abs().max((grid.lo + grid.h * n as Real).abs()).max_element();
+    let b = grid.bounds();
+    let reach = b.mins.abs().max(b.maxs.abs()).max_element();
     let on = (SURFACE_TOL * grid.h.min_element()).max(ROUND_OFF * reach);
     let inside = |i: usize, j: usize, k: usize| {
         let (a, b) = values[grid.index(i, j, k)];

@@ -218,10 +218,16 @@ impl Scratch {
     /// Starts a polyhedron as the box `lo`–`hi`, to be cut by [`cut`](Self::cut) plane by
     /// plane (a cutting-plane search; cells go through [`clip_cell`]).
     pub(super) fn start_box(&mut self, lo: Vector, hi: Vector) {
-        self.tol = tolerance(lo, hi);
-        self.limits = (BOX_VERTS, BOX_FACES);
-        self.current = 0;
+        self.begin(lo, hi, (BOX_VERTS, BOX_FACES));
         cell_faces(lo, hi, &mut self.polys[0]);
+    }
+
+    /// Sets the clip's tolerance for the box `lo`–`hi` and its `limits`, the first polyhedron
+    /// current.
+    fn begin(&mut self, lo: Vector, hi: Vector, limits: (usize, usize)) {
+        self.tol = tolerance(lo, hi);
+        self.limits = limits;
+        self.current = 0;
     }
 
     /// Keeps the part of the current polyhedron with `plane.n·x <= plane.h`; `None` (the
@@ -305,9 +311,7 @@ pub(super) fn clip_cell(
     scratch: &mut Scratch,
     deepest_first: bool,
 ) -> Option<Measure> {
-    scratch.tol = tolerance(lo, hi);
-    scratch.limits = (MAX_VERTS, MAX_FACES);
-    scratch.current = 0;
+    scratch.begin(lo, hi, (MAX_VERTS, MAX_FACES));
     let poly = &mut scratch.polys[0];
     if excluded(&scratch.planes, lo, hi, 4.0 * scratch.tol) {
         poly.clear();
@@ -409,9 +413,7 @@ pub(super) fn clip_box(
 ) -> Option<(Clipped, super::footprint::Sums, super::flux::Sums)> {
     // No two-plane exclusion test first (as for a cell): it costs a pass over all pairs of
     // the bodies' faces, and the box holds the whole overlap, so it rarely excludes.
-    scratch.tol = tolerance(lo, hi);
-    scratch.limits = (MAX_VERTS, MAX_FACES);
-    scratch.current = 0;
+    scratch.begin(lo, hi, (MAX_VERTS, MAX_FACES));
     cell_faces(lo, hi, &mut scratch.polys[0]);
     let measure = clip_deepest_first(lo, hi, scratch)?;
     let clipped = scratch.integrals(measure);
