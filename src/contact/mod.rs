@@ -242,63 +242,76 @@ impl ContactModel {
         b: &BodyState<'_, B>,
         state: &mut Option<ContactState>,
     ) -> Result<Option<ContactOutput>> {
+        let out = match state {
+            Some(s) => self.evaluate_live(a, b, s)?,
+            None => {
+                a.kinematics.check("kinematics of body A")?;
+                b.kinematics.check("kinematics of body B")?;
+                let geometry =
+                    compute_overlap(a.shape, &a.pose, b.shape, &b.pose, &self.settings, None)?;
+                geometry.map(|g| {
+                    let relative = relative_pose(&a.pose, &b.pose);
+                    let (geometry, approach) = self.placed(g, a, b);
+                    let s = state.insert(ContactState {
+                        damping: self.params.damping_for(approach),
+                        reference_approach_speed: approach,
+                        corrected_box: geometry.corrected_box,
+                        tangential: TangentialHistory::default(),
+                        normal_stiffness: 0.0,
+                        reference: None,
+                        frame: None,
+                    });
+                    self.respond(a, b, &relative, s, geometry, Refresh::FirstTouch)
+                })
+            }
+        };
+        if out.is_none() {
+            *state = None;
+        }
+        Ok(out)
+    }
+
+    /// [`evaluate`](Self::evaluate) for a live contact, its `state` updated in place; `Ok(None)`
+    /// when the bodies have parted (the state is then spent: the caller drops it). Lets a
+    /// caller that keeps its states boxed evaluate them without moving them.
+    pub(crate) fn evaluate_live<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        a: &BodyState<'_, A>,
+        b: &BodyState<'_, B>,
+        s: &mut ContactState,
+    ) -> Result<Option<ContactOutput>> {
         a.kinematics.check("kinematics of body A")?;
         b.kinematics.check("kinematics of body B")?;
         let relative = relative_pose(&a.pose, &b.pose);
-        let updated = match state {
-            None => Err(Refresh::FirstTouch),
-            Some(s) => match &s.reference {
-                Some(r) if self.reuse > 0.0 => {
-                    let update = |relative: &Pose, pose_b: &Pose| {
-                        r.update((a.shape, b.shape), relative, pose_b, s.corrected_box, self.reuse)
-                    };
-                    // A body of revolution turned back about its axis first; where that moves
-                    // the contact beyond an allowance (a disc rolling on its rim carries its
-                    // contact point round with it, the turned-back one slides), the pair as it
-                    // is: either describes the same pair exactly.
-                    match r.representative((a.shape, b.shape), &relative, &b.pose) {
-                        Some((turned, pose_b)) => {
-                            update(&turned, &pose_b).or_else(|_| update(&relative, &b.pose))
-                        }
-                        None => update(&relative, &b.pose),
-                    }
-                }
-                _ => Err(Refresh::Off),
-            },
-        };
-        let refresh = updated.as_ref().err().copied();
-        let geometry = match updated {
-            Ok(g) => g,
-            Err(_) => {
-                let previous = state.as_ref().map(|s| s.corrected_box);
-                let Some(g) = compute_overlap(
-                    a.shape,
-                    &a.pose,
-                    b.shape,
-                    &b.pose,
-                    &self.settings,
-                    previous.as_ref(),
-                )?
-                else {
-                    *state = None;
-                    return Ok(None);
+        let updated = match &s.reference {
+            Some(r) if self.reuse > 0.0 => {
+                let update = |relative: &Pose, pose_b: &Pose| {
+                    r.update((a.shape, b.shape), relative, pose_b, s.corrected_box, self.reuse)
                 };
-                g
+                // A body of revolution turned back about its axis first; where that moves the
+                // contact beyond an allowance (a disc rolling on its rim carries its contact
+                // point round with it, the turned-back one slides), the pair as it is: either
+                // describes the same pair exactly.
+                match r.representative((a.shape, b.shape), &relative, &b.pose) {
+                    Some((turned, pose_b)) => {
+                        update(&turned, &pose_b).or_else(|_| update(&relative, &b.pose))
+                    }
+                    None => update(&relative, &b.pose),
+                }
+            }
+            _ => Err(Refresh::Off),
+        };
+        let (geometry, refresh) = match updated {
+            Ok(g) => (g, None),
+            Err(why) => {
+                let previous = Some(&s.corrected_box);
+                let overlap =
+                    compute_overlap(a.shape, &a.pose, b.shape, &b.pose, &self.settings, previous)?;
+                let Some(g) = overlap else { return Ok(None) };
+                (g, Some(why))
             }
         };
-        let geometry = about_no_axis(through_ball_centres(geometry, a, b), a, b);
-        let x = geometry.contact_point;
-        let approach =
-            -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
-        let s = state.get_or_insert_with(|| ContactState {
-            damping: self.params.damping_for(approach),
-            reference_approach_speed: approach,
-            corrected_box: geometry.corrected_box,
-            tangential: TangentialHistory::default(),
-            normal_stiffness: 0.0,
-            reference: None,
-            frame: None,
-        });
+        let (geometry, approach) = self.placed(geometry, a, b);
         // In a binary impact the approach speed only falls after first touch. A contact that
         // a third body drives faster (a pile, a contact begun while sliding) re-bases `c` on
         // the larger speed, so `c ḋ` never exceeds `a(e)`: a contact begun at a crawl would
@@ -307,15 +320,60 @@ impl ContactModel {
             s.damping = self.params.damping_for(approach);
             s.reference_approach_speed = approach;
         }
-        if refresh.is_some() {
-            s.corrected_box = geometry.corrected_box;
-            // An exact form (closed-form spheres, exact polyhedra) costs less than an update.
-            let reuse = self.reuse > 0.0
-                && !crate::overlap::has_exact_form(a.shape, b.shape, &self.settings);
-            s.reference = reuse.then(|| {
-                Reference::new(&self.settings, relative, s.reference.as_ref(), a, b, &geometry)
-            });
-        }
+        Ok(Some(match refresh {
+            Some(why) => self.respond(a, b, &relative, s, geometry, why),
+            None => self.respond_updated(a, b, s, geometry),
+        }))
+    }
+
+    /// The geometry with its contact point placed for balls and bodies of revolution (see
+    /// [`evaluate`](Self::evaluate)), and the approach speed there.
+    fn placed<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        geometry: OverlapGeometry,
+        a: &BodyState<'_, A>,
+        b: &BodyState<'_, B>,
+    ) -> (OverlapGeometry, Real) {
+        let geometry = about_no_axis(through_ball_centres(geometry, a, b), a, b);
+        let x = geometry.contact_point;
+        let approach =
+            -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);
+        (geometry, approach)
+    }
+
+    /// The response to a fully evaluated `geometry` (refreshed for `why`; A at `relative` in
+    /// B's frame): the contact's reference for later updates set anew, then
+    /// [`respond_updated`](Self::respond_updated).
+    fn respond<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        a: &BodyState<'_, A>,
+        b: &BodyState<'_, B>,
+        relative: &Pose,
+        s: &mut ContactState,
+        geometry: OverlapGeometry,
+        why: Refresh,
+    ) -> ContactOutput {
+        s.corrected_box = geometry.corrected_box;
+        // An exact form (closed-form spheres, exact polyhedra) costs less than an update.
+        let reuse =
+            self.reuse > 0.0 && !crate::overlap::has_exact_form(a.shape, b.shape, &self.settings);
+        s.reference = reuse.then(|| {
+            Reference::new(&self.settings, *relative, s.reference.as_ref(), a, b, &geometry)
+        });
+        let mut out = self.respond_updated(a, b, s, geometry);
+        out.refresh = Some(why);
+        out
+    }
+
+    /// The forces for `geometry` and the contact state they leave: the normal stiffness, the
+    /// frame, the tangential spring's history.
+    fn respond_updated<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        a: &BodyState<'_, A>,
+        b: &BodyState<'_, B>,
+        s: &mut ContactState,
+        geometry: OverlapGeometry,
+    ) -> ContactOutput {
         let carried = s.tangential.carried(&a.pose, &b.pose, geometry.normal);
         let (force, spring) = contact_force_with_history(
             &self.params,
@@ -337,6 +395,6 @@ impl ContactModel {
                 &b.pose,
             );
         }
-        Ok(Some(ContactOutput { geometry, force, refresh }))
+        ContactOutput { geometry, force, refresh: None }
     }
 }

@@ -232,20 +232,24 @@ impl DiscreteContacts {
             };
             let model = ContactModel::new(params, this.settings)
                 .with_geometry_reuse(this.geometry_reuse)?;
-            let mut state = slot.as_deref().copied();
-            let out = model.evaluate(
-                &BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
-                &BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
-                &mut state,
-            )?;
-            let (Some(out), Some(state)) = (out, state) else {
+            let (body_a, body_b) = (
+                BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
+                BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
+            );
+            // A live contact's boxed state is evaluated where it lies (a state is ~1 kB).
+            let out = match slot {
+                Some(boxed) => model.evaluate_live(&body_a, &body_b, boxed)?,
+                None => {
+                    let mut state = None;
+                    let out = model.evaluate(&body_a, &body_b, &mut state)?;
+                    *slot = state.map(Box::new);
+                    out
+                }
+            };
+            let Some(out) = out else {
                 *slot = None;
                 return Ok((None, GapCheck::Closed, film));
             };
-            match slot {
-                Some(boxed) => **boxed = state,
-                None => *slot = Some(Box::new(state)),
-            }
             let f = out.force;
             let evaluated = Evaluated {
                 bodies: (ba, bb),
