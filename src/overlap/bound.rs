@@ -21,7 +21,7 @@
 
 use parry3d_f64::bounding_volume::Aabb;
 
-use super::crease::{Plane, Scratch};
+use super::crease::{self, Plane, Scratch};
 use super::Pair;
 use crate::math::{Real, Vector};
 use crate::shape::Sdf;
@@ -63,12 +63,13 @@ fn search<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     // Moves each plane out a little: the gradient of a user SDF may be a finite difference.
     let margin = 1e-9 * size;
     p.start_box(rough.mins, rough.maxs);
-    // The cut at `x` by the body that `x` lies farther outside (both when the two agree):
-    // a choice by the geometry, so the planes do not depend on which body is called A.
+    // The cut at `x` by the body that `x` lies farther outside (both when the two agree, in
+    // the order of their coefficients): a choice by the geometry, so the planes and the
+    // order they are clipped in do not depend on which body is called A.
     // `Some(whether it cut)`, `None` when `P` would outgrow the buffers (left as it was).
     let cut = |p: &mut Scratch, x: Vector| -> Option<bool> {
         let (da, db) = pair.both(x);
-        let mut any = false;
+        let mut planes = [None; 2];
         for body in [0, 1] {
             let (d, other) = if body == 0 { (da, db) } else { (db, da) };
             if d <= margin || d < other {
@@ -79,7 +80,16 @@ fn search<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             if g == Vector::ZERO || !g.is_finite() {
                 continue;
             }
-            p.cut(Plane { n: g, h: g.dot(x) - d + margin, body })?;
+            planes[body] = Some(Plane { n: g, h: g.dot(x) - d + margin, body });
+        }
+        if let [Some(a), Some(b)] = planes {
+            if crease::order(&a, &b).is_gt() {
+                planes.swap(0, 1);
+            }
+        }
+        let mut any = false;
+        for plane in planes.into_iter().flatten() {
+            p.cut(plane)?;
             any = true;
             if p.current_vertices().is_empty() {
                 break;

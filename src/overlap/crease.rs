@@ -344,7 +344,7 @@ fn clip_deepest_first(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option<M
 
 /// The order the planes are clipped in: by their coefficients, so the same for either
 /// labelling of the bodies.
-fn order(p: &Plane, q: &Plane) -> std::cmp::Ordering {
+pub(super) fn order(p: &Plane, q: &Plane) -> std::cmp::Ordering {
     (p.n.x.total_cmp(&q.n.x))
         .then(p.n.y.total_cmp(&q.n.y))
         .then(p.n.z.total_cmp(&q.n.z))
