@@ -1,5 +1,5 @@
 //! A Verlet list of bounding-sphere pairs: the cell-list search of
-//! [`overlapping_spheres`](crate::periodic::overlapping_spheres) run once with a *skin*, then
+//! [`overlapping_spheres`] run once with a *skin*, then
 //! reused for as long as no body can have closed the skin.
 //!
 //! At a build, every pair whose bounding spheres are closer than the skin `s` is kept. A later

@@ -15,7 +15,7 @@
 //! Unlike rays or samples along grid lines, the planes see a thin wedge's tapering ends
 //! wherever they lie, whatever the aspect ratio of the overlap.
 //!
-//! `P` is cut with [`crease`](super::crease)'s clip, the one the bent cells use: each vertex
+//! `P` is cut with [`crease`]'s clip, the one the bent cells use: each vertex
 //! stored once, in buffers kept per thread. Where `P` would outgrow them, the rounds stop there
 //! (the box still holds the overlap).
 

@@ -5,7 +5,7 @@
 //!
 //! The overlap of two such bodies is itself a convex polyhedron: the intersection of both
 //! bodies' face half-spaces. It is built by clipping a box around the pair by every face plane
-//! in turn (with [`crease`](super::crease)'s clip, which keeps each vertex once), and then
+//! in turn (with [`crease`]'s clip, which keeps each vertex once), and then
 //! everything the grid integration approximates is exact: the volume and
 //! centroid by the divergence theorem (tetrahedra from an inner point to the faces' fans), the
 //! normal from the faces' area vectors — blended as [`subcell`](super::subcell) does, B's
