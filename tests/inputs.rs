@@ -95,6 +95,38 @@ fn non_finite_states_and_unbounded_pairs() {
     }
 }
 
+/// An evaluation refused for bad input leaves a live contact's state as it was: a caller may
+/// fix the input and go on with the contact's history (damping, tangential spring, reference).
+#[test]
+fn a_refused_evaluation_leaves_a_live_contact_as_it_was() {
+    let ball = ConvexShape::ball(0.1).unwrap();
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    let m = Material::new(1e7, 0.3).unwrap();
+    let model = ContactModel::new(
+        PairParameters::new(&m, &m, 0.5)
+            .unwrap()
+            .with_friction(Friction::new(0.5, 0.4, 1e-3).unwrap()),
+        OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(),
+    );
+    let f = BodyState::at_rest(&floor, Pose::IDENTITY);
+    let at = |y: f64| Pose::from_translation(Vector::new(0.0, y, 0.0));
+    let mut state = None;
+    for y in [0.099, 0.0989] {
+        let a = BodyState::at_rest(&ball, at(y)).moving(Vector::new(0.1, -0.1, 0.0), Vector::ZERO);
+        model.evaluate(&a, &f, &mut state).unwrap().expect("in contact");
+    }
+    let live = state.expect("a live contact");
+    let bad = [
+        BodyState::at_rest(&ball, at(0.0988)).moving(Vector::new(f64::NAN, 0.0, 0.0), Vector::ZERO),
+        BodyState::at_rest(&ball, at(f64::NAN)),
+    ];
+    for a in &bad {
+        let mut kept = Some(live);
+        assert!(matches!(model.evaluate(a, &f, &mut kept), Err(Error::NonFinite { .. })));
+        assert_eq!(kept, Some(live));
+    }
+}
+
 #[test]
 fn enlargement_makes_a_near_miss_a_contact() {
     let ball = ConvexShape::ball(0.1).unwrap();

@@ -271,15 +271,17 @@ impl ContactModel {
         Ok(out)
     }
 
-    /// [`evaluate`](Self::evaluate) for a live contact, its `state` updated in place; `Ok(None)`
-    /// when the bodies have parted (the state is then spent: the caller drops it). Lets a
-    /// caller that keeps its states boxed evaluate them without moving them.
+    /// [`evaluate`](Self::evaluate) for a live contact, its `state` updated in place. On an
+    /// error the state is left as it was; `Ok(None)` when the bodies have parted, the state
+    /// then left as it was and spent (the caller drops it). Lets a caller that keeps its states
+    /// boxed evaluate them without moving them.
     pub(crate) fn evaluate_live<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         a: &BodyState<'_, A>,
         b: &BodyState<'_, B>,
-        s: &mut ContactState,
+        state: &mut ContactState,
     ) -> Result<Option<ContactOutput>> {
+        let s = state;
         a.kinematics.check("kinematics of body A")?;
         b.kinematics.check("kinematics of body B")?;
         let relative = relative_pose(&a.pose, &b.pose);
@@ -342,8 +344,8 @@ impl ContactModel {
     }
 
     /// The response to a fully evaluated `geometry` (refreshed for `why`; A at `relative` in
-    /// B's frame): the contact's reference for later updates set anew, then
-    /// [`respond_updated`](Self::respond_updated).
+    /// B's frame): the contact's box and its reference for later updates set anew, then
+    /// [`respond_updated`](Self::respond_updated)'s forces, reported as refreshed for `why`.
     fn respond<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         a: &BodyState<'_, A>,
@@ -366,7 +368,7 @@ impl ContactModel {
     }
 
     /// The forces for `geometry` and the contact state they leave: the normal stiffness, the
-    /// frame, the tangential spring's history.
+    /// frame, the tangential spring's history. Reported as an update (`refresh: None`).
     fn respond_updated<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         &self,
         a: &BodyState<'_, A>,

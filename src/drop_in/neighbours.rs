@@ -1,6 +1,5 @@
-//! A Verlet list of bounding-sphere pairs: the cell-list search of
-//! [`overlapping_spheres`] run once with a *skin*, then
-//! reused for as long as no body can have closed the skin.
+//! A Verlet list of bounding-sphere pairs: the cell-list search of [`overlapping_spheres`] run
+//! once with a *skin*, then reused for as long as no body can have closed the skin.
 //!
 //! At a build, every pair whose bounding spheres are closer than the skin `s` is kept. A later
 //! query asks for the pairs with gap `≤ reach_i + reach_j`; a pair left out had a gap above `s`

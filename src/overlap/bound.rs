@@ -15,9 +15,9 @@
 //! Unlike rays or samples along grid lines, the planes see a thin wedge's tapering ends
 //! wherever they lie, whatever the aspect ratio of the overlap.
 //!
-//! `P` is cut with [`crease`]'s clip, the one the bent cells use: each vertex
-//! stored once, in buffers kept per thread. Where `P` would outgrow them, the rounds stop there
-//! (the box still holds the overlap).
+//! `P` is cut with [`crease`]'s clip, the one the bent cells use: each vertex stored once, in
+//! buffers kept per thread. Where `P` would outgrow them, the rounds stop there (the box still
+//! holds the overlap).
 
 use parry3d_f64::bounding_volume::Aabb;
 
@@ -64,7 +64,7 @@ fn search<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let margin = 1e-9 * size;
     p.start_box(rough.mins, rough.maxs);
     // The cut at `x` by the body that `x` lies farther outside (both when the two agree, in
-    // the order of their coefficients): a choice by the geometry, so the planes and the
+    // the order `crease::order` gives them): a choice by the geometry, so the planes and the
     // order they are clipped in do not depend on which body is called A.
     // `Some(whether it cut)`, `None` when `P` would outgrow the buffers (left as it was).
     let cut = |p: &mut Scratch, x: Vector| -> Option<bool> {

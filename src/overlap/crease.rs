@@ -239,8 +239,8 @@ fn clip_deepest_first(lo: Vector, hi: Vector, scratch: &mut Scratch) -> Option<M
     clip_planes(0, scratch)
 }
 
-/// The order the planes are clipped in: by their coefficients, so the same for either
-/// labelling of the bodies.
+/// An order of planes by their coefficients alone, so the same for either labelling of the
+/// bodies: the order a cell's planes are clipped in, or the tie-break after their depth.
 pub(super) fn order(p: &Plane, q: &Plane) -> std::cmp::Ordering {
     (p.n.x.total_cmp(&q.n.x))
         .then(p.n.y.total_cmp(&q.n.y))

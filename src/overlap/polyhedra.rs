@@ -5,12 +5,11 @@
 //!
 //! The overlap of two such bodies is itself a convex polyhedron: the intersection of both
 //! bodies' face half-spaces. It is built by clipping a box around the pair by every face plane
-//! in turn (with [`crease`]'s clip, which keeps each vertex once), and then
-//! everything the grid integration approximates is exact: the volume and
-//! centroid by the divergence theorem (tetrahedra from an inner point to the faces' fans), the
-//! normal from the faces' area vectors — blended as [`subcell`](super::subcell) does, B's
-//! faces against A's — the indentation as the chord through the centroid along the normal, and
-//! the footprint from the faces.
+//! in turn (with [`crease`]'s clip, which keeps each vertex once), and then everything the grid
+//! integration approximates is exact: the volume and centroid by the divergence theorem
+//! (tetrahedra from an inner point to the faces' fans), the normal from the faces' area vectors
+//! — blended as [`subcell`](super::subcell) does, B's faces against A's — the indentation as the
+//! chord through the centroid along the normal, and the footprint from the faces.
 //!
 //! In sub-cell mode a pair of polyhedra without enlargement always takes this form: the grid
 //! would clip its cells by the same faces and sum to the same polyhedron

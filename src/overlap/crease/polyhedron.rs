@@ -6,17 +6,17 @@ use crate::math::{Real, Vector};
 
 /// Vertices a polyhedron's buffer holds: a clip of one within the limits adds at most one
 /// per edge cut (`BOX_VERTS / 2` edges at most).
-pub(super) const CAP_VERTS: usize = BOX_VERTS + BOX_VERTS / 2 + 8;
+const CAP_VERTS: usize = BOX_VERTS + BOX_VERTS / 2 + 8;
 
 /// Index entries a polyhedron's buffer holds: the clipped faces gain at most one each, and
 /// the cap takes at most one per vertex.
 const CAP_INDEX: usize = BOX_VERTS + BOX_FACES + CAP_VERTS + 8;
 
 /// Faces a polyhedron's buffer holds: the clipped ones and the cap.
-pub(super) const CAP_FACES: usize = BOX_FACES + 1;
+const CAP_FACES: usize = BOX_FACES + 1;
 
 /// No vertex: a vertex the clip cut off.
-pub(super) const GONE: u16 = u16::MAX;
+const GONE: u16 = u16::MAX;
 
 /// A vertex's side of the plane being clipped, as a bit (see [`Links::class`]): a face's
 /// vertices' bits or-ed together tell at once whether it lies inside, beyond or across.
@@ -50,7 +50,7 @@ pub(super) struct Poly {
     pub(super) verts: [Vector; CAP_VERTS],
     pub(super) nv: usize,
     pub(super) index: [u16; CAP_INDEX],
-    pub(super) ni: usize,
+    ni: usize,
     pub(super) faces: [Face; CAP_FACES],
     pub(super) nf: usize,
 }
@@ -106,6 +106,7 @@ pub(super) struct Links {
 }
 
 impl Links {
+    /// Empty buffers, every `leaving` entry [`GONE`] as a clip expects.
     pub(super) fn new() -> Self {
         Self {
             sides: [0.0; CAP_VERTS],
