@@ -3,11 +3,20 @@
 //! large and the next evaluation is full ([`Refresh`]). See the [module docs](super).
 
 use super::BodyState;
-use crate::error::Result;
 use crate::math::{Pose, Real, Rotation, Vector};
 use crate::overlap::{lens_measures, Flux, Footprint, OverlapGeometry, OverlapSettings};
 use crate::shape::Sdf;
 use parry3d_f64::bounding_volume::Aabb;
+
+mod lens;
+mod refresh;
+mod surface;
+
+pub use lens::Lens;
+use lens::LENS_ALLOWANCE;
+pub use refresh::{check_reuse, Refresh, Refreshes};
+pub use surface::Feature;
+use surface::{flat_at, glide, gradient_on, surface_gradients};
 
 /// A full evaluation's geometry in B's body frame, with A's pose in that frame then: what the
 /// updates between full evaluations start from, and how far they may go.
@@ -68,87 +77,6 @@ pub struct Reference {
     /// or a corner in the overlap, surfaces at an angle).
     #[cfg_attr(feature = "checkpoint", serde(default))]
     pub flux: Option<Flux>,
-}
-
-/// The part of a body's surface whose distance gives its gradient at a contact point.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
-pub enum Feature {
-    /// The whole body's distance (a smooth body, or a point where no single part was found).
-    #[default]
-    Whole,
-    /// A flat face, by its outward unit normal in the body's frame: a polyhedron's face
-    /// ([`Sdf::face_planes`]) or a flat face of a smooth body ([`Sdf::flat_faces`]).
-    Face(Vector),
-    /// The smooth part of a body with flat faces ([`Sdf::smooth_part`]): a cylinder's side.
-    Smooth,
-}
-
-impl Feature {
-    /// The part of `shape` whose distance gives its gradient `g` at `p` (both in the body's
-    /// frame): the face whose normal `g` is, else the smooth part when its gradient is `g`,
-    /// else the whole body.
-    fn at<S: Sdf + ?Sized>(shape: &S, p: Vector, g: Vector) -> Self {
-        let flats = shape.flat_faces();
-        let faces = shape.face_planes().or_else(|| flats.clone()).unwrap_or_default();
-        if let Some(n) =
-            faces.iter().map(|(n, _)| n.normalize_or_zero()).find(|n| (*n - g).length() <= FLAT)
-        {
-            return Feature::Face(n);
-        }
-        if flats.is_some() && (shape.smooth_part(p).1 - g).length() <= FLAT {
-            return Feature::Smooth;
-        }
-        Feature::Whole
-    }
-
-    /// This part's outward unit gradient at `p` (the body's frame) on `shape`.
-    fn gradient<S: Sdf + ?Sized>(&self, shape: &S, p: Vector) -> Vector {
-        match *self {
-            Feature::Whole => shape.gradient(p),
-            Feature::Face(n) => n,
-            Feature::Smooth => shape.smooth_part(p).1,
-        }
-    }
-}
-
-/// A ball's overlap with a ball or a flat body (a lens or a cap), as [`Reference`] keeps it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]
-pub struct Lens {
-    /// The bodies' radii (m, their enlargement included), A's then B's; infinite for a flat
-    /// body. At least one is finite: the ball whose depth is measured.
-    pub radii: [Real; 2],
-    /// The enlargements (m), A's then B's.
-    pub enlargement: [Real; 2],
-    /// The ball's depth at the full evaluation (m): its radius less the other body's enlarged
-    /// distance at its centre.
-    pub depth: Real,
-    /// How far a cap may travel over the flat body's face (m) with all of it staying on the
-    /// face, where its exact law holds: 0 between two balls (whose lens no travel bounds) and
-    /// where the face was not found to reach that far.
-    #[cfg_attr(feature = "checkpoint", serde(default))]
-    pub glide: Real,
-}
-
-impl Lens {
-    /// How deep the ball (A's if A is one, else B's) reaches into the other body, A at
-    /// `relative` in B's frame, `centres` the bodies' centres in their own frames: its radius
-    /// less the other's enlarged distance at its centre — for two balls the radii's sum less
-    /// the centres' distance, for a ball on a face the cap's height.
-    fn depth_at<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-        &self,
-        (a, b): (&A, &B),
-        relative: &Pose,
-        centres: [Vector; 2],
-    ) -> Real {
-        let [eps_a, eps_b] = self.enlargement;
-        if self.radii[0].is_finite() {
-            self.radii[0] + eps_b - b.distance(relative.transform_point(centres[0]))
-        } else {
-            self.radii[1] + eps_a - a.distance(relative.inverse_transform_point(centres[1]))
-        }
-    }
 }
 
 impl Reference {
@@ -451,98 +379,6 @@ fn twist_about(turn: Rotation, (point, axis): (Vector, Vector)) -> Option<Pose> 
     Some(Pose::from_parts(point - twist * point, twist))
 }
 
-/// The bodies' distance gradients at `x` (B's frame, A at `relative` in it): A's, then B's.
-fn surface_gradients<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-    shapes: (&A, &B),
-    relative: &Pose,
-    x: Vector,
-) -> [Vector; 2] {
-    [0, 1].map(|s| gradient_on(shapes, relative, s, Feature::Whole, x))
-}
-
-/// Body `s`'s (0: A, 1: B) outward unit gradient on the part `feature` of its surface at `x`
-/// (B's frame, A at `relative` in it).
-fn gradient_on<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-    (a, b): (&A, &B),
-    relative: &Pose,
-    s: usize,
-    feature: Feature,
-    x: Vector,
-) -> Vector {
-    if s == 0 {
-        relative.rotation * feature.gradient(a, relative.inverse_transform_point(x))
-    } else {
-        feature.gradient(b, x)
-    }
-}
-
-/// Whether each body (A, B) is flat at `x` (B's frame, A at `relative` in it), where its
-/// distance gradients are `gradients`: whether they stay the same (within round-off) at the
-/// points `step` away from `x` along two directions across the `normal` — a polyhedron's or
-/// a cylinder's face, not a ball, a curved side, or an edge within `step`.
-fn flat_at<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-    shapes: (&A, &B),
-    relative: &Pose,
-    x: Vector,
-    normal: Vector,
-    step: Real,
-    gradients: [Vector; 2],
-) -> [bool; 2] {
-    let (u, v) = normal.any_orthonormal_pair();
-    let mut flat = [step > 0.0; 2];
-    for y in [x + u * step, x + v * step] {
-        let g = surface_gradients(shapes, relative, y);
-        for s in 0..2 {
-            flat[s] &= (g[s] - gradients[s]).length() <= FLAT;
-        }
-    }
-    flat
-}
-
-/// How far a cap, within `reach` of the contact point `x` (B's frame, across the `normal`),
-/// may travel over the face of body `s` beneath it with all of it staying on the face: the
-/// first of four times `reach`, halved up to [`GLIDE_HALVINGS`] − 1 times, that the face is
-/// found to allow, or 0. (An unbounded body is probed too: it need not be a half-space.)
-///
-/// Where the body's distance gradient at the points `x ± √2 (reach + T) u` and `x ± √2
-/// (reach + T) v` (`u`, `v` across the normal) is its gradient at `x`, those points' nearest
-/// surface points lie on the face (inside a convex body the gradient is the normal of the
-/// nearest face, and a point's projection onto its nearest face's plane lies within every
-/// other face's half-space); the face is convex, so it holds their square and the disc of
-/// radius `reach + T` about `x` in it: a cap that travels by `T` stays on it.
-fn glide<A: Sdf + ?Sized, B: Sdf + ?Sized>(
-    shapes: (&A, &B),
-    relative: &Pose,
-    (x, normal): (Vector, Vector),
-    reach: Real,
-    gradients: [Vector; 2],
-    s: usize,
-) -> Real {
-    let (u, v) = normal.any_orthonormal_pair();
-    let on_face = |step: Real| {
-        [u, -u, v, -v].into_iter().all(|w| {
-            let g = gradient_on(shapes, relative, s, Feature::Whole, x + w * step);
-            (g - gradients[s]).length() <= FLAT
-        })
-    };
-    (0..GLIDE_HALVINGS)
-        .map(|k| 4.0 * reach / (1 << k) as Real)
-        .find(|&travel| on_face(core::f64::consts::SQRT_2 * (reach + travel)))
-        .unwrap_or(0.0)
-}
-
-/// How many times the approach allowance a lens's update may go ([`Reference::grown`]): it
-/// follows the lens's exact law, so its error is the grid's discretisation error at the last
-/// full evaluation carried to another depth.
-const LENS_ALLOWANCE: Real = 16.0;
-
-/// Travels a cap's [`glide`] tries: four times its reach, halved until one fits on the face.
-const GLIDE_HALVINGS: u32 = 6;
-
-/// Change of a unit gradient below which two points lie on one flat face (round-off of the
-/// frame transform).
-const FLAT: Real = 1e-9;
-
 /// How much a tilt counts against the normal allowance, as the change of depth `|t| reach` it
 /// makes across the overlap, where an update follows it. An update moves the centroid and the
 /// volume as a tilt does to first order (by the footprint between nearly parallel surfaces,
@@ -600,96 +436,12 @@ fn volume_law(
     }
 }
 
-/// Checks a geometry reuse fraction (see [`ContactModel::with_geometry_reuse`](super::ContactModel::with_geometry_reuse)): the
-/// fraction itself, or [`Error::InvalidParameter`](crate::Error::InvalidParameter) naming
-/// `geometry_reuse` outside `0 <= fraction <= 100`.
-pub fn check_reuse(fraction: Real) -> Result<Real> {
-    crate::error::check_range("geometry_reuse", fraction, 0.0..=100.0, "0 <= fraction <= 100")
-}
-
 /// A tilt's first-order effect on an updated overlap (see [`Reference::tilted`]).
 struct Tilt {
     /// Change of the volume beyond the approach's (m³).
     volume: Real,
     /// The centroid's move (B's frame, m).
     shift: Vector,
-}
-
-/// Why an evaluation integrated the overlap in full rather than updating the last full
-/// geometry (see [`ContactModel::with_geometry_reuse`](super::ContactModel::with_geometry_reuse)).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Refresh {
-    /// Geometry reuse is off, or the pair has an exact form, which costs less than an update.
-    Off,
-    /// A new contact: there is no full geometry to update.
-    FirstTouch,
-    /// The approach at the contact point exceeded its allowance.
-    Approach,
-    /// The approach was within its allowance, the approach plus the tilt across the overlap
-    /// was not.
-    Tilt,
-    /// The contact travelled across the grid by more than its allowance.
-    Travel,
-    /// The update lost the overlap: the bodies would part, or a surface gradient vanished.
-    Lost,
-}
-
-/// Full evaluations counted by why each was full ([`Refresh`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Refreshes {
-    /// [`Refresh::Off`].
-    pub off: usize,
-    /// [`Refresh::FirstTouch`].
-    pub first_touch: usize,
-    /// [`Refresh::Approach`].
-    pub approach: usize,
-    /// [`Refresh::Tilt`].
-    pub tilt: usize,
-    /// [`Refresh::Travel`].
-    pub travel: usize,
-    /// [`Refresh::Lost`].
-    pub lost: usize,
-}
-
-impl Refreshes {
-    /// Counts one full evaluation, full for `why`.
-    pub fn count(&mut self, why: Refresh) {
-        *match why {
-            Refresh::Off => &mut self.off,
-            Refresh::FirstTouch => &mut self.first_touch,
-            Refresh::Approach => &mut self.approach,
-            Refresh::Tilt => &mut self.tilt,
-            Refresh::Travel => &mut self.travel,
-            Refresh::Lost => &mut self.lost,
-        } += 1;
-    }
-
-    /// All full evaluations counted.
-    pub fn total(&self) -> usize {
-        self.off + self.first_touch + self.approach + self.tilt + self.travel + self.lost
-    }
-}
-
-impl core::ops::AddAssign for Refreshes {
-    fn add_assign(&mut self, o: Self) {
-        self.off += o.off;
-        self.first_touch += o.first_touch;
-        self.approach += o.approach;
-        self.tilt += o.tilt;
-        self.travel += o.travel;
-        self.lost += o.lost;
-    }
-}
-
-impl core::fmt::Display for Refreshes {
-    /// `first touch N, approach N, tilt N, travel N, lost N, reuse off N`.
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(
-            f,
-            "first touch {}, approach {}, tilt {}, travel {}, lost {}, reuse off {}",
-            self.first_touch, self.approach, self.tilt, self.travel, self.lost, self.off
-        )
-    }
 }
 
 impl Reference {
