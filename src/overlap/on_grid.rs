@@ -97,7 +97,7 @@ pub(super) fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     let snug = Grid::on(&Aabb::new(b.mins - pad, b.maxs + pad), n)?;
     within(pair, &snug, rough, meets_boundary).or_else(|| {
         within(pair, &inner.padded(), rough, |grid, values| {
-            boundary_nodes(grid).any(|(node, _)| in_both(values[node]))
+            any_boundary_node(grid, |node, _, _| in_both(values[node]))
         })
     })
 }
@@ -132,7 +132,7 @@ pub(super) fn meets_boundary(grid: &Grid, values: &[(Real, Real)]) -> bool {
     };
     let m = grid.n + 1;
     let steps = [1, m, m * m];
-    boundary_nodes(grid).any(|(node, (idx, on))| {
+    any_boundary_node(grid, |node, idx, on| {
         in_both(values[node])
             || (0..3).any(|axis| {
                 // An edge lies in the boundary where another of its coordinates is on it.
@@ -148,17 +148,30 @@ pub(super) fn in_both((a, b): (Real, Real)) -> bool {
     a.max(b) <= 0.0
 }
 
-/// The grid's nodes on its boundary: each node's index in the grid's values, its `(i, j, k)`
-/// and whether each coordinate lies on the boundary.
-pub(super) fn boundary_nodes(
+/// Whether `f` holds for some node on the grid's boundary, given the node's index in the grid's
+/// values, its `(i, j, k)` and whether each coordinate lies on the boundary. Rows inside the
+/// grid visit their two end nodes only.
+pub(super) fn any_boundary_node(
     grid: &Grid,
-) -> impl Iterator<Item = (usize, ([usize; 3], [bool; 3]))> + '_ {
-    let m = grid.n + 1;
-    let on = move |i: usize| i == 0 || i == m - 1;
-    (0..m)
-        .flat_map(move |k| (0..m).flat_map(move |j| (0..m).map(move |i| [i, j, k])))
-        .filter(move |idx| idx.iter().any(|&i| on(i)))
-        .map(move |idx| (grid.index(idx[0], idx[1], idx[2]), (idx, idx.map(on))))
+    mut f: impl FnMut(usize, [usize; 3], [bool; 3]) -> bool,
+) -> bool {
+    let last = grid.n;
+    let on = |i: usize| i == 0 || i == last;
+    for k in 0..=last {
+        for j in 0..=last {
+            let row = grid.index(0, j, k);
+            let (on_j, on_k) = (on(j), on(k));
+            let mut node = |i: usize| f(row + i, [i, j, k], [on(i), on_j, on_k]);
+            if on_j || on_k {
+                if (0..=last).any(&mut node) {
+                    return true;
+                }
+            } else if node(0) || node(last) {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// Normal, indentation and the output from an integral; `None` when it found no overlap.
