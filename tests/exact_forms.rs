@@ -3,10 +3,29 @@
 
 use approx::assert_relative_eq;
 use discrete_contact::prelude::*;
+use discrete_contact::OverlapGeometry;
 
 #[path = "common/contact.rs"]
 mod shared;
 use shared::*;
+
+/// An exact form's overlap against the fine grid's: the relative volume difference, the
+/// contact points' distance against the overlap's width (a thin lens is far wider than deep),
+/// the normals' difference and the relative indentation difference; `worst` keeps the largest
+/// of each.
+fn differences(exact: &OverlapGeometry, grid: &OverlapGeometry, worst: &mut [f64; 4]) -> [f64; 4] {
+    let errs = [
+        (exact.volume / grid.volume - 1.0).abs(),
+        (exact.contact_point - grid.contact_point).length()
+            / (exact.volume / exact.indentation).sqrt(),
+        (exact.normal - grid.normal).length(),
+        (exact.indentation / grid.indentation - 1.0).abs(),
+    ];
+    for (w, e) in worst.iter_mut().zip(errs) {
+        *w = w.max(e);
+    }
+    errs
+}
 
 /// The closed-form overlap of sphere pairs (a lens of two caps; one cap on a half-space) is what
 /// the grid integration converges to: against sub-cell N_c = 64 on random pairs of radii,
@@ -55,17 +74,7 @@ fn closed_form_sphere_overlaps_match_the_fine_grid() {
             let exact = compute_overlap(x, px, y, py, &s.with_closed_form_spheres(true), None)
                 .unwrap()
                 .expect("overlap in closed form");
-            let errs = [
-                (exact.volume / grid.volume - 1.0).abs(),
-                // Against the overlap's width (a thin lens is far wider than deep).
-                (exact.contact_point - grid.contact_point).length()
-                    / (exact.volume / exact.indentation).sqrt(),
-                (exact.normal - grid.normal).length(),
-                (exact.indentation / grid.indentation - 1.0).abs(),
-            ];
-            for (w, e) in worst.iter_mut().zip(errs) {
-                *w = w.max(e);
-            }
+            let errs = differences(&exact, &grid, &mut worst);
             assert!(
                 errs[0] < 2e-3 && errs[1] < 1e-2 && errs[2] < 1e-3 && errs[3] < 1e-2,
                 "pair {k} swap {swap}: {errs:?}"
@@ -239,16 +248,7 @@ fn exact_polyhedron_overlaps_match_the_fine_grid() {
             let exact = compute_overlap(x, px, y, py, &fine.with_exact_polyhedra(true), None)
                 .unwrap()
                 .expect("exact overlap");
-            let errs = [
-                (exact.volume / grid.volume - 1.0).abs(),
-                (exact.contact_point - grid.contact_point).length()
-                    / (exact.volume / exact.indentation).sqrt(),
-                (exact.normal - grid.normal).length(),
-                (exact.indentation / grid.indentation - 1.0).abs(),
-            ];
-            for (w, e) in worst.iter_mut().zip(errs) {
-                *w = w.max(e);
-            }
+            let errs = differences(&exact, &grid, &mut worst);
             assert!(
                 errs[0] < 3e-3 && errs[1] < 1e-2 && errs[2] < 1e-2 && errs[3] < 1e-2,
                 "pair {k} swap {swap}: {errs:?}"
