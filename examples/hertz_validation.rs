@@ -2,6 +2,9 @@
 //! modes, N_c = 2…32: error against run time.
 //!
 //! Writes `target/validation/hertz_error.csv`, `hertz_force.csv` and `hertz_validation.png`.
+//!
+//! `cargo run --release --example hertz_validation -- --facet-bulge` runs the sub-cell
+//! resolutions and their reference at N_c = 64 with `OverlapSettings::with_facet_bulge`.
 
 #[path = "common/mod.rs"]
 mod common;
@@ -31,6 +34,8 @@ fn rms(values: &[f64], reference: &[f64]) -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args = common::Args::from_env(include_str!("hertz_validation.rs"));
+    let bulge = args.flag("--facet-bulge");
     let cases = HertzCase::all();
     let ds = HertzCase::indentations();
     let dir = common::output_dir();
@@ -43,12 +48,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut runs = Vec::new();
     for (ci, case) in cases.iter().enumerate() {
         let analytic: Vec<f64> = ds.iter().map(|&d| case.analytic_force(d)).collect();
-        let fine = OverlapSettings::new(REFERENCE_N, IntegrationMode::Subcell)?;
+        let fine =
+            OverlapSettings::new(REFERENCE_N, IntegrationMode::Subcell)?.with_facet_bulge(bulge);
         let reference: Vec<f64> =
             ds.iter().map(|&d| case.force(&fine, d)).collect::<Result<_, _>>()?;
         for mode in MODES {
             for n in RESOLUTIONS {
-                let s = OverlapSettings::new(n, mode)?;
+                let s = OverlapSettings::new(n, mode)?.with_facet_bulge(bulge);
                 let forces: Vec<f64> =
                     ds.iter().map(|&d| case.force(&s, d)).collect::<Result<_, _>>()?;
                 let us = common::time_us(40.0, || {

@@ -290,7 +290,15 @@ fn damaged_foreign_and_mismatched_files_are_refused_with_the_reason() {
     checkpoint::save(
         &bad,
         "test/settings",
-        &(0usize, discrete_contact::IntegrationMode::Subcell, [0.0f64; 2], false, false, false),
+        &(
+            0usize,
+            discrete_contact::IntegrationMode::Subcell,
+            [0.0f64; 2],
+            false,
+            false,
+            false,
+            false,
+        ),
     )
     .unwrap();
     match checkpoint::load::<discrete_contact::OverlapSettings>(&bad, "test/settings") {

@@ -80,7 +80,7 @@ prop_compose! {
         poses in (pose(), pose()),
         velocities in (velocity(), velocity()),
         material in (5.0..12.0f64, 0.0..0.5f64, 0.05..1.0f64),
-        grid in (1usize..10, any::<bool>(), any::<bool>(), any::<bool>()),
+        grid in (1usize..10, any::<bool>(), any::<bool>(), any::<bool>(), any::<bool>()),
         closeness in 0.0..1.3f64,
         enlargement in (any::<bool>(), -3.0..-1.0f64),
     ) -> PairCase {
@@ -105,8 +105,8 @@ struct PairCase {
     /// log10 E, ν, e.
     material: (Real, Real, Real),
     /// N_c, sub-cell, friction, exact forms (closed-form spheres and exact polyhedra; without
-    /// them polyhedral pairs on the grid).
-    grid: (usize, bool, bool, bool),
+    /// them polyhedral pairs on the grid), smooth bodies' facet layers.
+    grid: (usize, bool, bool, bool, bool),
     closeness: Real,
     /// Whether both bodies are enlarged, and by what log10 fraction of A's size.
     enlargement: (bool, Real),
@@ -123,7 +123,7 @@ fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
         poses: (pa, pb),
         velocities: (va, vb),
         material: (modulus, nu, e),
-        grid: (n_c, subcell, friction, exact),
+        grid: (n_c, subcell, friction, exact, bulge),
         closeness,
         enlargement: (enlarged, eps),
     } = c.clone();
@@ -152,6 +152,7 @@ fn check_pair(c: &PairCase) -> Result<bool, TestCaseError> {
             .with_closed_form_spheres(exact)
             .with_exact_polyhedra(exact)
             .with_polyhedra_on_grid(!exact)
+            .with_facet_bulge(bulge)
             .with_enlargement(eps, eps)
             .unwrap(),
     );

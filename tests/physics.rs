@@ -3,7 +3,7 @@
 
 use approx::assert_relative_eq;
 use discrete_contact::prelude::*;
-use discrete_contact::{damping_from_restitution, ContactState};
+use discrete_contact::{compute_overlap, damping_from_restitution, ContactState};
 use discrete_contact_validation::hertz::HertzCase;
 
 #[path = "common/contact.rs"]
@@ -833,5 +833,71 @@ fn a_curved_body_on_a_face_takes_the_face_normal() {
                 g.normal
             );
         }
+    }
+}
+
+/// With the facet bulge ([`OverlapSettings::with_facet_bulge`]) a ball's overlap with a
+/// half-space and with another ball is third order in the grid's spacing: the volume's error
+/// against the closed form falls at least fivefold from `N_c` = 2 to 4 and from 4 to 8 (second
+/// order would give fourfold; measured 14–175×) and is below 1e-3 at `N_c` = 4, where the
+/// piecewise-linear surfaces alone are ~5 % short; its surface area is within 0.5 % (the rims
+/// completed); the result is the same whichever body is A, and moves rigidly with the pair.
+#[test]
+fn the_facet_bulge_makes_a_balls_volume_third_order() {
+    let small = ConvexShape::ball(0.01).unwrap();
+    let large = ConvexShape::ball(0.02).unwrap();
+    let floor = ConvexShape::half_space(Vector::Y).unwrap();
+    let turn = Rotation::from_scaled_axis(Vector::new(0.3, -0.2, 0.5));
+    let pose_a = Pose::from_parts(Vector::new(0.001, 0.01 - 4e-5, -0.002), turn);
+    let lens_b = Pose::from_parts(Vector::new(0.0015, 0.04 - 6e-5, -0.0018), turn.inverse());
+    let pairs: [(&ConvexShape, Pose); 2] = [(&floor, Pose::IDENTITY), (&large, lens_b)];
+    for (b, pose_b) in pairs {
+        let exact = compute_overlap(
+            &small,
+            &pose_a,
+            b,
+            &pose_b,
+            &settings(4, IntegrationMode::Subcell).with_closed_form_spheres(true),
+            None,
+        )
+        .unwrap()
+        .unwrap();
+        let (exact, exact_area) = (exact.volume, exact.surface_area);
+        let error = |n: usize| {
+            let s = settings(n, IntegrationMode::Subcell).with_facet_bulge(true);
+            let g = compute_overlap(&small, &pose_a, b, &pose_b, &s, None).unwrap().unwrap();
+            (g.volume / exact - 1.0).abs()
+        };
+        let plain = {
+            let s = settings(4, IntegrationMode::Subcell);
+            let g = compute_overlap(&small, &pose_a, b, &pose_b, &s, None).unwrap().unwrap();
+            (g.volume / exact - 1.0).abs()
+        };
+        let (e2, e4, e8) = (error(2), error(4), error(8));
+        assert!(
+            e4 < 1e-3 && e4 < plain / 20.0,
+            "N_c = 4: {e4:.3e} (without the layer {plain:.3e})"
+        );
+        assert!(e2 > 5.0 * e4 && e4 > 5.0 * e8, "errors {e2:.3e} {e4:.3e} {e8:.3e}");
+
+        let s = settings(4, IntegrationMode::Subcell).with_facet_bulge(true);
+        let ab = compute_overlap(&small, &pose_a, b, &pose_b, &s, None).unwrap().unwrap();
+        // The area's rims completed: the volume law's exponent of a cap or a lens, `d s / 2V`,
+        // is not pushed below 2 by an area shorter than the volume.
+        let area = (ab.surface_area / exact_area - 1.0).abs();
+        assert!(area < 5e-3, "surface area off by {area:.3e}");
+        let ba = compute_overlap(b, &pose_b, &small, &pose_a, &s, None).unwrap().unwrap();
+        assert_relative_eq!(ab.volume, ba.volume, max_relative = 1e-12);
+        assert!((ab.contact_point - ba.contact_point).length() < 1e-12, "swapped point");
+        assert!((ab.normal + ba.normal).length() < 1e-9, "swapped normal");
+        let moved = Pose::from_parts(
+            Vector::new(0.3, -1.2, 0.7),
+            Rotation::from_scaled_axis(Vector::new(-0.4, 0.9, 0.2)),
+        );
+        let m = compute_overlap(&small, &(moved * pose_a), b, &(moved * pose_b), &s, None)
+            .unwrap()
+            .unwrap();
+        assert_relative_eq!(m.volume, ab.volume, max_relative = 1e-9);
+        assert!((m.contact_point - moved.transform_point(ab.contact_point)).length() < 1e-12);
     }
 }

@@ -225,6 +225,7 @@ pub fn compute_overlap<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         let pair = Pair {
             a: placed(a, inv * *pose_a, settings.enlargement[0]),
             b: placed(b, inv * *pose_b, settings.enlargement[1]),
+            facet_bulge: settings.facet_bulge,
         };
         let rough = conservative_box(&pair);
         match rough {

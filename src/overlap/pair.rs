@@ -133,6 +133,9 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
 pub(crate) struct Pair<'a, A: ?Sized, B: ?Sized> {
     pub(super) a: Placed<'a, A>,
     pub(super) b: Placed<'a, B>,
+    /// Whether smooth bodies' facets carry the layer to their surface
+    /// ([`OverlapSettings::with_facet_bulge`](super::OverlapSettings::with_facet_bulge)).
+    pub(super) facet_bulge: bool,
 }
 
 impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Pair<'_, A, B> {

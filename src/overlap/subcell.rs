@@ -27,7 +27,10 @@
 //! Root finding instead of interpolating SDF values matters: inside a cylinder or a box the
 //! SDF has kinks (the nearest face changes), where interpolated values would misplace the
 //! surface by a large fraction of a cell. With exact crossings the error is
-//! the surface's curvature within a cell: second order.
+//! the surface's curvature within a cell: second order. A body smooth and curved everywhere (a
+//! ball, a capsule) may also add the layer between each of its facets and its surface
+//! ([`Cutter::add_facet`]) and complete its area at the rims ([`Cutter::add_rim`]): its volume
+//! is then third order ([`OverlapSettings::with_facet_bulge`](super::OverlapSettings::with_facet_bulge)).
 //!
 //! Volume and first moment of the clipped pieces are closed-form; cells wholly inside count
 //! whole, cells wholly outside cost nothing. The normal is the area vector of the surface
@@ -228,6 +231,12 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     /// Whether each body may have edges or corners ([`Sdf::has_edges`]): only then are cells
     /// tested for being bent.
     edges: [bool; 2],
+    /// Whether each body's facets carry the layer to its surface: with the setting on, for a
+    /// body smooth and curved everywhere (no edge, not a half-space), the layer between each of
+    /// its facets and its surface is added
+    /// ([`Cutter::add_facet`]), and the area at the rims it shares with the other body is
+    /// completed ([`Cutter::add_rim`]).
+    bulge: [bool; 2],
     /// Buffers of the tangent-plane clip, reused from cell to cell.
     scratch: crease::Scratch,
     /// Each body's face planes when it is a polyhedron: its cells are clipped by those that cut
@@ -378,6 +387,97 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         v
     }
 
+    /// Adds body `s`'s facet `poly` (oriented along `outward`) to the normal's area vectors;
+    /// where `s` is smooth, also the layer between the facet and the surface over it. The
+    /// facet's corners lie on the surface (at the rim, on the other body's) and the facet inside
+    /// the convex body, so the layer's height `q = −d_s` is quadratic over the facet to leading
+    /// order: `∫q = A (¾ q(centroid) + Σ q(corner) / 12)` over each triangle is exact for a
+    /// quadratic, and makes the volume third order.
+    #[inline(always)]
+    fn add_facet(&mut self, s: usize, poly: &[Vert], outward: Vector) {
+        self.sums.add_facet(s, poly, outward);
+        if self.bulge[s] && poly.len() >= 3 {
+            self.add_layer(s, poly);
+        }
+    }
+
+    /// The layer of [`add_facet`](Self::add_facet).
+    #[inline(never)]
+    fn add_layer(&mut self, s: usize, poly: &[Vert]) {
+        let height =
+            |c: &Self, v: &Vert| if v.d[s].is_nan() { -c.distance(s, v.x) } else { -v.d[s] };
+        let q0 = height(self, &poly[0]);
+        let mut q_prev = height(self, &poly[1]);
+        for i in 2..poly.len() {
+            let q_next = height(self, &poly[i]);
+            let (a, b, c) = (poly[0].x, poly[i - 1].x, poly[i].x);
+            let area = 0.5 * (b - a).cross(c - a).length();
+            let centre = (a + b + c) / 3.0;
+            let layer = area * (0.75 * -self.distance(s, centre) + (q0 + q_prev + q_next) / 12.0);
+            self.sums.volume += layer;
+            self.sums.moment += centre * layer;
+            q_prev = q_next;
+        }
+    }
+
+    /// Completes the surface area at the rim of body `first`'s facet `poly` (oriented along
+    /// `outward`, clipped by the other body) where a body is smooth. Along an edge of `poly`
+    /// with both ends on the other surface, the overlap's surface ends at the straight edge; the
+    /// two bodies' surfaces meet beyond it, on the rim's curve and past the layer `first`'s
+    /// facet leaves out. Across the edge, at a point `x` with distances `d_f`, `d_o` and unit
+    /// gradients `g_f`, `g_o` (without their parts along the edge, `c = g_f·g_o`), the
+    /// surfaces' tangent planes meet at `x + α g_f + β g_o`, `α + c β = −d_f`, `c α + β = −d_o`:
+    /// `first`'s surface reaches `β √(1 − c²)` further, the other's `α √(1 − c²)`, and
+    /// Simpson's rule over the edge's ends and middle gives each strip's area. Without it the
+    /// area stays second order while the layers make the volume third, and the volume law's
+    /// exponent `d s / 2V` of a cap falls below 2 (the stiffness then follows the grid).
+    #[inline(never)]
+    fn add_rim(&mut self, first: usize, poly: &[Vert], outward: Vector) {
+        let other = 1 - first;
+        let at = |c: &Self, s: usize, x: Vector| {
+            if s == 0 {
+                c.pair.a.distance_and_gradient(x)
+            } else {
+                c.pair.b.distance_and_gradient(x)
+            }
+        };
+        let n_first = area_vector(poly, outward).normalize_or_zero();
+        for i in 0..poly.len() {
+            let (p, q) = (&poly[i], &poly[(i + 1) % poly.len()]);
+            if p.d[other] != 0.0 || q.d[other] != 0.0 {
+                continue;
+            }
+            let (u, v) = (p.x, q.x);
+            let length = (v - u).length();
+            if !(length > 0.0) {
+                continue;
+            }
+            let t = (v - u) / length;
+            let across = |g: Vector| (g - t * g.dot(t)).normalize_or_zero();
+            let mut g_other = Vector::ZERO;
+            let mut rim = |c: &Self, x: Vector| {
+                let ((d_f, g_f), (d_o, g_o)) = (at(c, first, x), at(c, other, x));
+                let (g_f, g_o) = (across(g_f), across(g_o));
+                g_other += g_o;
+                let cos = g_f.dot(g_o);
+                let sin2 = 1.0 - cos * cos;
+                if !(sin2 > 0.0) {
+                    return [0.0; 2];
+                }
+                let (alpha, beta) = ((-d_f + cos * d_o) / sin2, (-d_o + cos * d_f) / sin2);
+                [(beta * sin2.sqrt()).max(0.0), (alpha * sin2.sqrt()).max(0.0)]
+            };
+            let (a, m, b) = (rim(self, u), rim(self, (u + v) * 0.5), rim(self, v));
+            let [strip_f, strip_o] = [0, 1].map(|k| length * (a[k] + 4.0 * m[k] + b[k]) / 6.0);
+            if strip_f.is_finite() && strip_o.is_finite() {
+                self.sums.area[first] += strip_f;
+                self.sums.normal[first] += n_first * strip_f;
+                self.sums.area[other] += strip_o;
+                self.sums.normal[other] += g_other.normalize_or_zero() * strip_o;
+            }
+        }
+    }
+
     /// Splits tetrahedron `p` by body `s`'s surface: calls `piece` with each tetrahedron of
     /// the part inside `s`, then `facet` with each triangle of the cut (the wedge's
     /// quadrilateral split along its pieces' diagonal) and a vector pointing out of `s`.
@@ -492,7 +592,10 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 if own_facets {
                     cutter.need_other = false;
                     let (poly, len) = cutter.clip_triangle(second, tri);
-                    cutter.sums.add_facet(first, &poly[..len], outward);
+                    cutter.add_facet(first, &poly[..len], outward);
+                    if cutter.bulge != [false; 2] {
+                        cutter.add_rim(first, &poly[..len], outward);
+                    }
                 }
             },
         );
@@ -516,7 +619,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 sums.volume += v;
                 sums.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
             },
-            &mut |cutter, tri, outward| cutter.sums.add_facet(second, tri, outward),
+            &mut |cutter, tri, outward| cutter.add_facet(second, tri, outward),
         );
     }
 
@@ -605,6 +708,10 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         memo_len: 0,
         sums,
         edges: [pair.a.has_edges(), pair.b.has_edges()],
+        bulge: [
+            pair.facet_bulge && !pair.a.has_edges() && pair.a.shape.half_space_normal().is_none(),
+            pair.facet_bulge && !pair.b.has_edges() && pair.b.shape.half_space_normal().is_none(),
+        ],
         scratch: crease::Scratch::take(),
         faces: [faces(0, planes_a), faces(1, planes_b)],
         flats: [faces(0, flats_a), faces(1, flats_b)],
