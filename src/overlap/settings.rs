@@ -117,7 +117,8 @@ impl OverlapSettings {
     /// a sphere at `N_c` = 4 within a few 1e-4 of its converged value, as close as `N_c` = 32
     /// comes without it — for about a quarter more work per evaluation of a sphere pair at the
     /// same `N_c`. Bodies with edges or flat faces (cuboids, hulls, cylinders, cones, enlarged
-    /// polyhedra) and half-spaces are integrated as before. Off by default while the f32
+    /// polyhedra) and half-spaces carry no layer (their area at a rim shared with a ball or a
+    /// capsule is completed all the same). Off by default while the f32
     /// drop-in's agreement with the f64 one is tested by a single bounce, which the layer moves
     /// past that test's bound (see `docs/performance.md`).
     pub fn with_facet_bulge(mut self, on: bool) -> Self {

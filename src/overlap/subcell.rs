@@ -388,7 +388,8 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     }
 
     /// Adds body `s`'s facet `poly` (oriented along `outward`) to the normal's area vectors;
-    /// where `s` is smooth, also the layer between the facet and the surface over it. The
+    /// where `s` is smooth and the facet bulge is on ([`Cutter::bulge`]), also the layer between
+    /// the facet and the surface over it. The
     /// facet's corners lie on the surface (at the rim, on the other body's) and the facet inside
     /// the convex body, so the layer's height `q = −d_s` is quadratic over the facet to leading
     /// order: `∫q = A (¾ q(centroid) + Σ q(corner) / 12)` over each triangle is exact for a
@@ -427,8 +428,10 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     /// facet leaves out. Across the edge, at a point `x` with distances `d_f`, `d_o` and unit
     /// gradients `g_f`, `g_o` (without their parts along the edge, `c = g_f·g_o`), the
     /// surfaces' tangent planes meet at `x + α g_f + β g_o`, `α + c β = −d_f`, `c α + β = −d_o`:
-    /// `first`'s surface reaches `β √(1 − c²)` further, the other's `α √(1 − c²)`, and
-    /// Simpson's rule over the edge's ends and middle gives each strip's area. Without it the
+    /// `first`'s surface reaches `β √(1 − c²)` further, the other's `α √(1 − c²)` (no less than
+    /// nothing, and only where the surfaces meet in an acute wedge, `c < 0`), and Simpson's rule
+    /// over the edge's ends and middle gives each strip's area. Where `Cutter::tet` runs both
+    /// orders (an exact tie, rare) no rim is completed. Without it the
     /// area stays second order while the layers make the volume third, and the volume law's
     /// exponent `d s / 2V` of a cap falls below 2 (the stiffness then follows the grid).
     #[inline(never)]
@@ -442,9 +445,16 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             }
         };
         let n_first = area_vector(poly, outward).normalize_or_zero();
+        if n_first == Vector::ZERO {
+            return;
+        }
+        // A rim edge joins two points the clip cut on the facet's edges: on the other surface
+        // (`d_o = 0`) and not corners of the facet (which lie on `first`'s, `d_f = 0`; a corner
+        // that lies on both to the last bit is not a cut).
+        let cut = |v: &Vert| v.d[other] == 0.0 && v.d[first] != 0.0;
         for i in 0..poly.len() {
             let (p, q) = (&poly[i], &poly[(i + 1) % poly.len()]);
-            if p.d[other] != 0.0 || q.d[other] != 0.0 {
+            if !(cut(p) && cut(q)) {
                 continue;
             }
             let (u, v) = (p.x, q.x);
@@ -461,7 +471,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 g_other += g_o;
                 let cos = g_f.dot(g_o);
                 let sin2 = 1.0 - cos * cos;
-                if !(sin2 > 0.0) {
+                // Only a rim where the surfaces close the overlap in an acute wedge (outward
+                // normals more than a right angle apart) is completed.
+                if !(sin2 > 0.0 && cos < 0.0) {
                     return [0.0; 2];
                 }
                 let (alpha, beta) = ((-d_f + cos * d_o) / sin2, (-d_o + cos * d_f) / sin2);
