@@ -36,6 +36,12 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         self.shape.has_edges()
     }
 
+    /// Whether the body is smooth and curved everywhere: no edge ([`Sdf::has_edges`]) and not
+    /// a half-space (a ball, a capsule, either enlarged).
+    pub(super) fn is_smooth_and_curved(&self) -> bool {
+        !self.shape.has_edges() && self.shape.half_space_normal().is_none()
+    }
+
     /// The shape's closed-form crossing of the segment from `inside` to `outside`, as the
     /// fraction from `inside` ([`Sdf::segment_crossing`]).
     pub(super) fn segment_crossing(&self, inside: Vector, outside: Vector) -> Option<Real> {

@@ -233,9 +233,8 @@ struct Cutter<'p, 'a, A: ?Sized, B: ?Sized> {
     edges: [bool; 2],
     /// Whether each body's facets carry the layer to its surface: with the setting on, for a
     /// body smooth and curved everywhere (no edge, not a half-space), the layer between each of
-    /// its facets and its surface is added
-    /// ([`Cutter::add_facet`]), and the area at the rims it shares with the other body is
-    /// completed ([`Cutter::add_rim`]).
+    /// its facets and its surface is added ([`Cutter::add_facet`]), and the area at the rims it
+    /// shares with the other body is completed ([`Cutter::add_rim`]).
     bulge: [bool; 2],
     /// Buffers of the tangent-plane clip, reused from cell to cell.
     scratch: crease::Scratch,
@@ -279,11 +278,13 @@ impl Sums {
         }
     }
 
-    /// Adds body `s`'s facet `poly` (oriented along `outward`) to its area vector and area.
-    fn add_facet(&mut self, s: usize, poly: &[Vert], outward: Vector) {
+    /// Adds body `s`'s facet `poly` (oriented along `outward`) to its area vector and area;
+    /// returns the facet's area vector.
+    fn add_facet(&mut self, s: usize, poly: &[Vert], outward: Vector) -> Vector {
         let a = area_vector(poly, outward);
         self.normal[s] += a;
         self.area[s] += a.length();
+        a
     }
 }
 
@@ -312,6 +313,15 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             self.pair.a.distance(x)
         } else {
             self.pair.b.distance(x)
+        }
+    }
+
+    /// Body `s`'s distance and outward unit gradient at `x`, in one call.
+    fn distance_and_gradient(&self, s: usize, x: Vector) -> (Real, Vector) {
+        if s == 0 {
+            self.pair.a.distance_and_gradient(x)
+        } else {
+            self.pair.b.distance_and_gradient(x)
         }
     }
 
@@ -387,19 +397,20 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         v
     }
 
-    /// Adds body `s`'s facet `poly` (oriented along `outward`) to the normal's area vectors;
-    /// where `s` is smooth and the facet bulge is on ([`Cutter::bulge`]), also the layer between
-    /// the facet and the surface over it. The
+    /// Adds body `s`'s facet `poly` (oriented along `outward`) to the normal's area vectors and
+    /// returns its area vector; where `s` is smooth and the facet bulge is on
+    /// ([`Cutter::bulge`]), also adds the layer between the facet and the surface over it. The
     /// facet's corners lie on the surface (at the rim, on the other body's) and the facet inside
     /// the convex body, so the layer's height `q = −d_s` is quadratic over the facet to leading
     /// order: `∫q = A (¾ q(centroid) + Σ q(corner) / 12)` over each triangle is exact for a
     /// quadratic, and makes the volume third order.
     #[inline(always)]
-    fn add_facet(&mut self, s: usize, poly: &[Vert], outward: Vector) {
-        self.sums.add_facet(s, poly, outward);
+    fn add_facet(&mut self, s: usize, poly: &[Vert], outward: Vector) -> Vector {
+        let area = self.sums.add_facet(s, poly, outward);
         if self.bulge[s] && poly.len() >= 3 {
             self.add_layer(s, poly);
         }
+        area
     }
 
     /// The layer of [`add_facet`](Self::add_facet).
@@ -421,8 +432,8 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
         }
     }
 
-    /// Completes the surface area at the rim of body `first`'s facet `poly` (oriented along
-    /// `outward`, clipped by the other body) where a body is smooth. Along an edge of `poly`
+    /// Completes the surface area at the rim of body `first`'s facet `poly` (area vector `area`,
+    /// out of `first`; clipped by the other body) where a body is smooth. Along an edge of `poly`
     /// with both ends on the other surface, the overlap's surface ends at the straight edge; the
     /// two bodies' surfaces meet beyond it, on the rim's curve and past the layer `first`'s
     /// facet leaves out. Across the edge, at a point `x` with distances `d_f`, `d_o` and unit
@@ -431,20 +442,13 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
     /// `first`'s surface reaches `β √(1 − c²)` further, the other's `α √(1 − c²)` (no less than
     /// nothing, and only where the surfaces meet in an acute wedge, `c < 0`), and Simpson's rule
     /// over the edge's ends and middle gives each strip's area. Where `Cutter::tet` runs both
-    /// orders (an exact tie, rare) no rim is completed. Without it the
-    /// area stays second order while the layers make the volume third, and the volume law's
-    /// exponent `d s / 2V` of a cap falls below 2 (the stiffness then follows the grid).
+    /// orders (an exact tie, rare) no rim is completed. Without it the area stays second order
+    /// while the layers make the volume third, and the volume law's exponent `d s / 2V` of a cap
+    /// falls below 2 (the stiffness then follows the grid).
     #[inline(never)]
-    fn add_rim(&mut self, first: usize, poly: &[Vert], outward: Vector) {
+    fn add_rim(&mut self, first: usize, poly: &[Vert], area: Vector) {
         let other = 1 - first;
-        let at = |c: &Self, s: usize, x: Vector| {
-            if s == 0 {
-                c.pair.a.distance_and_gradient(x)
-            } else {
-                c.pair.b.distance_and_gradient(x)
-            }
-        };
-        let n_first = area_vector(poly, outward).normalize_or_zero();
+        let n_first = area.normalize_or_zero();
         if n_first == Vector::ZERO {
             return;
         }
@@ -466,7 +470,8 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             let across = |g: Vector| (g - t * g.dot(t)).normalize_or_zero();
             let mut g_other = Vector::ZERO;
             let mut rim = |c: &Self, x: Vector| {
-                let ((d_f, g_f), (d_o, g_o)) = (at(c, first, x), at(c, other, x));
+                let ((d_f, g_f), (d_o, g_o)) =
+                    (c.distance_and_gradient(first, x), c.distance_and_gradient(other, x));
                 let (g_f, g_o) = (across(g_f), across(g_o));
                 g_other += g_o;
                 let cos = g_f.dot(g_o);
@@ -604,9 +609,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 if own_facets {
                     cutter.need_other = false;
                     let (poly, len) = cutter.clip_triangle(second, tri);
-                    cutter.add_facet(first, &poly[..len], outward);
+                    let area = cutter.add_facet(first, &poly[..len], outward);
                     if cutter.bulge != [false; 2] {
-                        cutter.add_rim(first, &poly[..len], outward);
+                        cutter.add_rim(first, &poly[..len], area);
                     }
                 }
             },
@@ -631,7 +636,9 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
                 sums.volume += v;
                 sums.moment += (r[0].x + r[1].x + r[2].x + r[3].x) * (0.25 * v);
             },
-            &mut |cutter, tri, outward| cutter.add_facet(second, tri, outward),
+            &mut |cutter, tri, outward| {
+                cutter.add_facet(second, tri, outward);
+            },
         );
     }
 
@@ -721,8 +728,8 @@ pub(crate) fn integrate<A: Sdf + ?Sized, B: Sdf + ?Sized>(
         sums,
         edges: [pair.a.has_edges(), pair.b.has_edges()],
         bulge: [
-            pair.facet_bulge && !pair.a.has_edges() && pair.a.shape.half_space_normal().is_none(),
-            pair.facet_bulge && !pair.b.has_edges() && pair.b.shape.half_space_normal().is_none(),
+            pair.facet_bulge && pair.a.is_smooth_and_curved(),
+            pair.facet_bulge && pair.b.is_smooth_and_curved(),
         ],
         scratch: crease::Scratch::take(),
         faces: [faces(0, planes_a), faces(1, planes_b)],

@@ -355,11 +355,7 @@ impl<A: Sdf + ?Sized, B: Sdf + ?Sized> Cutter<'_, '_, A, B> {
             let mut d = [Real::NAN; 2];
             for s in 0..2 {
                 if samples[s] == SAMPLES {
-                    let (ds, gs) = if s == 0 {
-                        self.pair.a.distance_and_gradient(x)
-                    } else {
-                        self.pair.b.distance_and_gradient(x)
-                    };
+                    let (ds, gs) = self.distance_and_gradient(s, x);
                     d[s] = ds;
                     face_gradients[s][f] = gs;
                 }
