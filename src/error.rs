@@ -103,6 +103,18 @@ pub enum Error {
         /// The least indentation accepted, in spacings.
         required: Real,
     },
+    /// A step whose outcome cannot be trusted — a contact's overlap beyond what its bodies can
+    /// hold, energy the step created, an implicit step that found no solution — and that
+    /// could not be redone safely. The world is left as it was before the step.
+    #[error("step {step} rejected: {problem}, between {pair}; the world is left as before the step: use a smaller step (integration_parameters.dt), a softer material or slower bodies")]
+    StepRejected {
+        /// The drop-in's step count when it happened (its first step is 0).
+        step: u64,
+        /// Which pair, in words.
+        pair: String,
+        /// What went wrong, with the numbers.
+        problem: String,
+    },
     /// A file could not be created, written, renamed or read.
     #[error("i/o error on `{path}`: {message}")]
     Io {

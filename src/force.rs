@@ -5,7 +5,7 @@
 
 use crate::error::{check_finite_vec, Result};
 use crate::material::PairParameters;
-use crate::math::{Real, Vector};
+use crate::math::{Matrix, Real, Vector};
 use crate::overlap::OverlapGeometry;
 use crate::tangential::{self, SpringForce, TangentialLaw};
 
@@ -68,7 +68,7 @@ impl ContactForce {
 }
 
 /// Undamped normal force `E* k sqrt(V d)` (N); zero without an overlap.
-fn elastic_force(params: &PairParameters, geometry: &OverlapGeometry) -> Real {
+pub(crate) fn elastic_force(params: &PairParameters, geometry: &OverlapGeometry) -> Real {
     let (v, d) = (geometry.volume, geometry.indentation);
     if v <= 0.0 || d <= 0.0 {
         return 0.0;
@@ -236,4 +236,33 @@ fn rocking_damping(
     let held = (1.0 + damping * approach_speed).max(0.0);
     let scale = if rate > held { held / rate } else { 1.0 };
     -n.cross(f.spread * tilt) * (flat * damping * f_el / f.area * scale)
+}
+
+/// The rocking damping of [`rocking_damping`] as a matrix `C_r` (N·m·s, world): the couple
+/// on A is `−C_r (ω_A − ω_B)`, `C_r = (flat c F_el / A) [n]ₓ J [n]ₓᵀ`, symmetric and positive
+/// semi-definite, without the hold that keeps the pressure from pulling (an implicit step,
+/// which takes it at the end of the step, is stable without it). Zero where
+/// [`rocking_damping`] is.
+pub(crate) fn rocking_damping_rate(
+    damping: Real,
+    f_el: Real,
+    geometry: &OverlapGeometry,
+) -> Matrix {
+    let Some(f) = geometry.footprint else { return Matrix::ZERO };
+    if !(damping > 0.0 && f_el > 0.0 && f.area > 0.0) {
+        return Matrix::ZERO;
+    }
+    let p = volume_exponent(geometry.volume, geometry.indentation, geometry.surface_area);
+    let flat = (3.0 / p - 2.0).clamp(0.0, 1.0);
+    if !(flat > 0.0) {
+        return Matrix::ZERO;
+    }
+    let n = geometry.normal;
+    let cross = Matrix::from_cols(n.cross(Vector::X), n.cross(Vector::Y), n.cross(Vector::Z));
+    let c = cross * f.spread * cross.transpose() * (flat * damping * f_el / f.area);
+    if c.is_finite() {
+        c
+    } else {
+        Matrix::ZERO
+    }
 }

@@ -122,6 +122,8 @@ pub mod contact;
 pub mod coupling;
 pub mod error;
 pub mod force;
+#[cfg_attr(not(any(feature = "rapier", feature = "rapier-f32")), allow(dead_code))]
+mod implicit;
 pub mod io;
 pub mod lubrication;
 pub mod material;

@@ -118,7 +118,7 @@ impl ContactFrame {
     /// `pose_b`, whose normal stiffness is `k_n`. The force `F` of its resistance to tilting
     /// ([`rocking`](Self::rocking)) is the elastic force behind `k_n` (`2 d k_n / (1 + p)`, the
     /// inverse of [`normal_stiffness`](crate::force::normal_stiffness) on the same geometry).
-    fn new(g: &OverlapGeometry, k_n: Real, pose_a: &Pose, pose_b: &Pose) -> Self {
+    pub(crate) fn new(g: &OverlapGeometry, k_n: Real, pose_a: &Pose, pose_b: &Pose) -> Self {
         let (x, n) = (g.contact_point, g.normal);
         let rocking = g.footprint.map_or(Matrix::ZERO, |f| {
             let offset = f.centroid - x - n * n.dot(f.centroid - x);
@@ -147,6 +147,17 @@ impl ContactFrame {
             rocking,
         }
     }
+}
+
+/// The geometry with its contact point placed where the normal force of a ball (through its
+/// centre) and of a body of revolution (without moment about its axis) acts: see
+/// [`ContactModel::evaluate`].
+pub(crate) fn placed<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+    geometry: OverlapGeometry,
+    a: &BodyState<'_, A>,
+    b: &BodyState<'_, B>,
+) -> OverlapGeometry {
+    about_no_axis(through_ball_centres(geometry, a, b), a, b)
 }
 
 /// A's body frame in B's body frame.
@@ -336,7 +347,7 @@ impl ContactModel {
         a: &BodyState<'_, A>,
         b: &BodyState<'_, B>,
     ) -> (OverlapGeometry, Real) {
-        let geometry = about_no_axis(through_ball_centres(geometry, a, b), a, b);
+        let geometry = placed(geometry, a, b);
         let x = geometry.contact_point;
         let approach =
             -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(geometry.normal);

@@ -25,6 +25,27 @@ impl DiscreteContacts {
         self.sphere_pairs(world, hooks, |_, _| margin, &mut |a, b, shift| out.push((a, b, shift)))
     }
 
+    /// [`candidate_pairs`](Self::candidate_pairs) for a sub-step of `h` taken implicitly: each
+    /// bounding sphere also grown by how far its body may move within the sub-step (its speed
+    /// and its acceleration), so that a pair about to touch is found before it does.
+    pub(super) fn candidates_within(
+        &self,
+        world: &PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+        h: Real,
+        out: &mut Vec<Candidate>,
+    ) -> Result<()> {
+        out.clear();
+        self.half_space_pairs(world, hooks, &mut |a, b| out.push((a, b, Vector::ZERO)));
+        let margin = self.margin();
+        let gravity = vector(world.gravity).length();
+        let reach = |handled: &Handled, k: &BodyKinematics| {
+            let rim = k.angvel.length() * (handled.radius + handled.centre.length());
+            margin + h * (k.linvel.length() + rim) + h * h * gravity
+        };
+        self.sphere_pairs(world, hooks, reach, &mut |a, b, shift| out.push((a, b, shift)))
+    }
+
     /// Whether rapier would let colliders `a` and `b` push each other: on different bodies,
     /// both enabled and solid, one of their active collision types admitting the pair of body
     /// types (a collider without a body counts as fixed), their collision and solver groups

@@ -51,14 +51,24 @@ impl DiscreteContacts {
                     linvel: vector(rb.linvel()),
                     angvel: vector(rb.angvel()),
                 };
-                let mass = if rb.is_dynamic() { real(rb.mass()) } else { Real::INFINITY };
-                ColliderMotion { pose, kinematics: k, body: Some(h), mass }
+                let (mass, acceleration) = if rb.is_dynamic() {
+                    let inverse = vector(rb.mass_properties().effective_inv_mass);
+                    let free =
+                        Vector::select(inverse.cmpgt(Vector::ZERO), Vector::ONE, Vector::ZERO);
+                    let pull = vector(world.gravity) * real(rb.gravity_scale()) * free
+                        + vector(rb.user_force()) * inverse;
+                    (real(rb.mass()), pull)
+                } else {
+                    (Real::INFINITY, Vector::ZERO)
+                };
+                ColliderMotion { pose, kinematics: k, body: Some(h), mass, acceleration }
             }
             None => ColliderMotion {
                 pose,
                 kinematics: BodyKinematics::at_rest(pose.translation),
                 body: None,
                 mass: Real::INFINITY,
+                acceleration: Vector::ZERO,
             },
         }
     }
@@ -145,25 +155,32 @@ impl DiscreteContacts {
             .with_stiffness(self.stiffness)
     }
 
-    /// Computes and adds the contact forces of all handled candidate pairs; leaves in the
-    /// sub-step buffers' `applied` each body's force and torque as they were before (for
-    /// [`take_back`]). `first`: the step's first sub-step, which keeps the remembered gaps of
-    /// this sub-step's candidates only.
+    /// Computes and adds the contact forces of all handled candidate pairs over a sub-step of
+    /// `h`; leaves in the sub-step buffers' `applied` each body's force and torque as they were
+    /// before (for [`take_back`]). `first`: the step's first sub-step, which keeps the
+    /// remembered gaps of this sub-step's candidates only. `rest_speed`: the speed below which
+    /// a pair meets without an impact ([`Integration::Implicit`]).
     ///
     /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
     /// candidates' order afterwards, so the result does not depend on the thread count. Each
     /// candidate's contact state is moved out of the map (a box), updated where it is
     /// evaluated, and moved back while the contact lives; the contacts of pairs that are no
     /// longer candidates end. The lists a sub-step fills are kept between sub-steps.
+    ///
+    /// Under [`Integration::Implicit`] the contacts that are not impacts, and the pairs that
+    /// will touch slowly within the sub-step, are not applied as evaluated: their laws over the
+    /// sub-step go to the islands' implicit solve (see `islands`), with every other force of
+    /// the sub-step on their bodies, and the impulses it finds are applied instead.
     pub(super) fn apply_forces(
         &mut self,
         world: &mut PhysicsWorld,
         hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
         first: bool,
+        (h, rest_speed): (Real, Real),
     ) -> Result<()> {
         let mut buffers = std::mem::take(&mut self.buffers);
-        let result = self.forces_into(world, hooks, stats, first, &mut buffers);
+        let result = self.forces_into(world, hooks, stats, first, (h, rest_speed), &mut buffers);
         self.buffers = buffers;
         result
     }
@@ -175,10 +192,16 @@ impl DiscreteContacts {
         hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
         first: bool,
+        (h, rest_speed): (Real, Real),
         buffers: &mut SubstepBuffers,
     ) -> Result<()> {
         let SubstepBuffers { pairs, slots, checks, added, applied } = buffers;
-        self.candidate_pairs(world, hooks, pairs)?;
+        let implicit = self.integration == Integration::Implicit;
+        if implicit {
+            self.candidates_within(world, hooks, h, pairs)?;
+        } else {
+            self.candidate_pairs(world, hooks, pairs)?;
+        }
         slots.clear();
         slots.extend(pairs.iter().map(|&(ca, cb, _)| self.states.remove(&(ca, cb))));
         let eps = self.settings.enlargement();
@@ -187,30 +210,80 @@ impl DiscreteContacts {
         let evaluate = |(&(ca, cb, shift), slot): (&Candidate, &mut Option<Box<ContactState>>)|
          -> Result<Checked> {
             let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
-            let ColliderMotion { pose: pa, kinematics: ka, body: ba, .. } = Self::kinematics(w, ca);
-            let ColliderMotion { pose: mut pb, kinematics: mut kb, body: bb, .. } =
-                Self::kinematics(w, cb);
+            let ma = Self::kinematics(w, ca);
+            let mut mb = Self::kinematics(w, cb);
             // B's nearest image (periodic boxes); a rigid shift changes no force or torque.
-            pb.translation += shift;
-            kb.center_of_mass += shift;
+            mb.pose.translation += shift;
+            mb.kinematics.center_of_mass += shift;
+            let (pa, ka, ba, pb, kb, bb) = (ma.pose, ma.kinematics, ma.body, mb.pose, mb.kinematics, mb.body);
             let (sa, sb) = (this.queries[&ca].as_ref(), this.queries[&cb].as_ref());
             let film = |pb: &Pose, kb: &BodyKinematics, nearest| {
                 this.film(ha, hb, (&pa, sa, &ka, ba), (pb, sb, kb, bb), nearest)
             };
+            let sides = || {
+                let side = |handled, m: &ColliderMotion, shape| islands::Side {
+                    handled,
+                    pose: m.pose,
+                    shape,
+                    kinematics: m.kinematics,
+                    acceleration: m.acceleration,
+                };
+                (side(ha, &ma, sa), side(hb, &mb, sb))
+            };
+            // How far the pair may close within the sub-step, beyond the contact's reach
+            // (implicit: a pair about to touch gets its law now).
+            let travel = || {
+                let (a, b) = sides();
+                a.travel(h) + b.travel(h)
+            };
+            // The pair's parameters: the spring's damping needs the pair's tangential mass; a
+            // body whose mass rapier has not computed yet (zero before its first step) leaves
+            // it unknown.
+            let pair_params = || -> Result<PairParameters> {
+                let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
+                if m_t > 0.0 {
+                    this.params(ha, hb)?.with_tangential_mass(m_t)
+                } else {
+                    this.params(ha, hb)
+                }
+            };
+            // A pair about to touch slowly: its law over the sub-step, from a probe.
+            let approaching = |film: Option<Film>| -> Result<Checked> {
+                let (a, b) = sides();
+                let law = this.approaching_law(&pair_params()?, &a, &b, h, rest_speed);
+                let resting = law.map(|law| Evaluated {
+                    bodies: (ba, bb),
+                    force_on_a: Vector::ZERO,
+                    torques: (Vector::ZERO, Vector::ZERO),
+                    refresh: None,
+                    indentation: 0.0,
+                    resting: Some(law),
+                    impact: None,
+                    approach: 0.0,
+                });
+                Ok((resting, GapCheck::Closed, film))
+            };
             // A live contact is evaluated (it ends there when the bodies part). Other pairs:
             // a lower bound of their distance (`separation`) rules out those that do not touch
             // for a fraction of an evaluation's cost, and a pair found apart stays apart
-            // without one while the bodies have moved less than its margin.
-            if slot.is_none() {
+            // without one while the bodies have moved less than its margin (and, implicit,
+            // cannot close it within the sub-step).
+            let live = slot.is_some();
+            // The tangential spring as the evaluation will find it, for an implicit law.
+            let history = slot.as_ref().map(|s| s.tangential);
+            if !live {
+                let ahead = if implicit { travel() } else { 0.0 };
                 if let Some(gap) = this.gaps.get(&(ca, cb)) {
-                    if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) < gap.margin {
+                    if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) + ahead
+                        < gap.margin
+                    {
                         return Ok((None, GapCheck::Kept, None));
                     }
                 }
                 let (distance, nearest) =
                     separation((&pa, sa, &ha.shape), (&pb, sb, &hb.shape));
                 let margin = distance - this.reach();
-                if margin > 0.0 {
+                if margin > ahead {
                     return Ok((None, GapCheck::Found(Gap { margin, poses: (pa, pb) }), None));
                 }
                 if distance - (eps[0] + eps[1]) > 0.0 {
@@ -218,18 +291,15 @@ impl DiscreteContacts {
                     // points' (a half-space's contact is parry's own, exact for it).
                     let bounded = ha.radius.is_finite() && hb.radius.is_finite();
                     let nearest = nearest.filter(|_| bounded);
-                    return Ok((None, GapCheck::Closed, film(&pb, &kb, nearest)));
+                    let film = film(&pb, &kb, nearest);
+                    if implicit {
+                        return approaching(film);
+                    }
+                    return Ok((None, GapCheck::Closed, film));
                 }
             }
             let film = film(&pb, &kb, None);
-            // The spring's damping needs the pair's tangential mass; a body whose mass rapier has
-            // not computed yet (zero before its first step) leaves it unknown.
-            let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
-            let params = if m_t > 0.0 {
-                this.params(ha, hb)?.with_tangential_mass(m_t)?
-            } else {
-                this.params(ha, hb)?
-            };
+            let params = pair_params()?;
             let model = ContactModel::new(params, this.settings)
                 .with_geometry_reuse(this.geometry_reuse)?;
             let (body_a, body_b) = (
@@ -248,15 +318,45 @@ impl DiscreteContacts {
             };
             let Some(out) = out else {
                 *slot = None;
+                // Touching without an overlap yet (boxes stacked exactly touching).
+                if implicit && !live {
+                    return approaching(film);
+                }
                 return Ok((None, GapCheck::Closed, film));
             };
             let f = out.force;
+            let state = slot.as_deref().expect("a live contact has a state");
+            // Implicit: an impact is a contact that began at the rest speed or faster, while
+            // its window lasts; every other contact is resting.
+            let impact = !implicit
+                || if live {
+                    this.impacts.contains_key(&(ca, cb))
+                } else {
+                    state.reference_approach_speed >= rest_speed
+                };
+            let window = (implicit && impact && !live).then(|| {
+                let m_star = 1.0 / (1.0 / ma.mass + 1.0 / mb.mass);
+                let r_star = 1.0 / (1.0 / ha.radius + 1.0 / hb.radius);
+                let e_star = effective_modulus(&ha.material, &hb.material);
+                IMPACT_WINDOW * hertz_contact_time(m_star, r_star, e_star, state.reference_approach_speed)
+            });
+            let resting = (!impact)
+                .then(|| {
+                let carried = history.map_or((Vector::ZERO, false), |t| {
+                    (t.carried(&pa, &pb, out.geometry.normal), t.sliding)
+                });
+                let (a, b) = sides();
+                this.resting_law(&params, (&out, state, carried), (&a, &b), (h, rest_speed))
+            });
             let evaluated = Evaluated {
                 bodies: (ba, bb),
                 force_on_a: f.force_on_a,
                 torques: (f.torque_on_a, f.torque_on_b),
                 refresh: out.refresh,
                 indentation: out.geometry.indentation,
+                resting,
+                impact: window,
+                approach: f.approach_speed,
             };
             Ok((Some(evaluated), GapCheck::Closed, film))
         };
@@ -289,9 +389,10 @@ impl DiscreteContacts {
         // Each body's sum runs in the candidates' order, whichever thread evaluated them.
         added.clear();
         // A pair's force on A (B takes minus it) and its torques on A and B, to its bodies.
-        let mut add = |bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
-                       f: Vector,
-                       torques: (Vector, Vector)| {
+        let add = |added: &mut HashMap<RigidBodyHandle, (Vector, Vector)>,
+                   bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
+                   f: Vector,
+                   torques: (Vector, Vector)| {
             for (h, f, t) in [(bodies.0, f, torques.0), (bodies.1, -f, torques.1)] {
                 if let Some(h) = h {
                     let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
@@ -307,6 +408,7 @@ impl DiscreteContacts {
         } else {
             std::mem::take(&mut self.gaps)
         };
+        let mut resting: Vec<islands::Resting> = Vec::new();
         for (e, &(ca, cb, _)) in checks.iter().zip(pairs.iter()) {
             let Ok((contact, gap, film)) = e else { unreachable!("errors were returned above") };
             match gap {
@@ -323,17 +425,46 @@ impl DiscreteContacts {
                 GapCheck::Closed => {}
             }
             if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film {
-                add(*bodies, *force_on_a, (*torque_on_a, *torque_on_b));
+                add(added, *bodies, *force_on_a, (*torque_on_a, *torque_on_b));
             }
             let Some(c) = contact else { continue };
-            stats.evaluations += 1;
+            if let Some(law) = &c.resting {
+                resting.push(islands::Resting { law: *law, bodies: c.bodies, pair: (ca, cb) });
+                if self.states.contains_key(&(ca, cb)) {
+                    stats.evaluations += 1;
+                } else {
+                    stats.approaching_contacts += 1;
+                }
+            } else {
+                stats.evaluations += 1;
+                add(added, c.bodies, c.force_on_a, c.torques);
+            }
             if let Some(why) = c.refresh {
                 stats.refreshes.count(why);
             }
             stats.max_indentation = stats.max_indentation.max(c.indentation);
-            add(c.bodies, c.force_on_a, c.torques);
         }
         self.gaps = gaps;
+        self.track_impacts(checks, pairs, h, rest_speed);
+        if !resting.is_empty() {
+            let (responses, islands) = self.solve_islands(world, &mut resting, added, h)?;
+            stats.implicit_contacts += resting.len();
+            stats.islands += islands;
+            for (r, (response, relative)) in resting.iter().zip(responses) {
+                let [on_a, on_b] = r.law.on_bodies(&response);
+                add(added, r.bodies, on_a.0 / h, (on_a.1 / h, on_b.1 / h));
+                let depth = r.law.normal_law.depth - h * r.law.normal.dot(relative.0);
+                stats.max_indentation = stats.max_indentation.max(depth);
+                if let Some((stretch, sliding)) =
+                    islands::spring_after(&r.law, &response, h, relative)
+                {
+                    if let Some(state) = self.states.get_mut(&r.pair) {
+                        state.tangential.displacement = stretch;
+                        state.tangential.sliding = sliding;
+                    }
+                }
+            }
+        }
         applied.clear();
         for (&h, &(f, t)) in added.iter() {
             if let Some(rb) = world.bodies.get_mut(h) {
@@ -346,11 +477,43 @@ impl DiscreteContacts {
         }
         Ok(())
     }
+
+    /// Keeps the impacts' record (implicit integration) after a sub-step of `h`: a contact that
+    /// began as an impact is entered with its window, every impact's window shortens by `h`,
+    /// and an impact leaves when its contact has ended, or its window has passed and its
+    /// normal motion is slower than `rest_speed`.
+    fn track_impacts(
+        &mut self,
+        checks: &[Result<Checked>],
+        pairs: &[Candidate],
+        h: Real,
+        rest_speed: Real,
+    ) {
+        if self.integration != Integration::Implicit {
+            self.impacts.clear();
+            return;
+        }
+        let mut impacts = std::mem::take(&mut self.impacts);
+        let mut kept = HashMap::with_capacity_and_hasher(impacts.len(), Default::default());
+        for (e, &(ca, cb, _)) in checks.iter().zip(pairs) {
+            let Ok((Some(c), _, _)) = e else { continue };
+            if c.resting.is_some() || !self.states.contains_key(&(ca, cb)) {
+                continue;
+            }
+            let window = c.impact.or_else(|| impacts.remove(&(ca, cb)));
+            if let Some(left) = window.map(|w| w - h) {
+                if left > 0.0 || c.approach.abs() >= rest_speed {
+                    kept.insert((ca, cb), left);
+                }
+            }
+        }
+        self.impacts = kept;
+    }
 }
 
 /// The film's contact between two colliders (handled, pose, parry shape) within `cutoff` of
 /// each other: parry's contact, its gap brought to the nearest points where they are apart.
-fn film_contact(
+pub(super) fn film_contact(
     (ha, pa, sa): (&Handled, &Pose, &dyn parry3d_f64::shape::Shape),
     (hb, pb, sb): (&Handled, &Pose, &dyn parry3d_f64::shape::Shape),
     cutoff: Real,

@@ -5,6 +5,7 @@
 mod candidates;
 mod forces;
 mod hooks;
+mod islands;
 mod neighbours;
 mod network;
 mod substeps;
@@ -34,8 +35,8 @@ use crate::periodic::{PeriodicBox, Sphere};
 use crate::shape::{ConvexShape, Sdf};
 use crate::substep::coordinate_spacing;
 pub use crate::substep::{
-    StepPolicy, StepStats, AT_REST_SPEED, MIN_SUBSTEPS_PER_CONTACT, PRECISION_SPACINGS,
-    STABLE_SUBSTEPS_PER_HALF_PERIOD, SUBSTEPS_PER_CONTACT,
+    Integration, StepPolicy, StepStats, AT_REST_SPEED, IMPACT_WINDOW, MIN_SUBSTEPS_PER_CONTACT,
+    PRECISION_SPACINGS, REST_STEPS, STABLE_SUBSTEPS_PER_HALF_PERIOD, SUBSTEPS_PER_CONTACT,
 };
 use crate::tangential::{stiffness_ratio, TangentialLaw};
 use neighbours::NeighbourList;
@@ -80,6 +81,9 @@ struct ColliderMotion {
     kinematics: BodyKinematics,
     body: Option<RigidBodyHandle>,
     mass: Real,
+    /// The linear acceleration gravity and the user's force give the body (m/s²; zero for a
+    /// body that does not move).
+    acceleration: Vector,
 }
 
 /// A candidate pair and the shift that moves the second collider to its image nearest the
@@ -94,6 +98,13 @@ struct Evaluated {
     torques: (Vector, Vector),
     refresh: Option<crate::contact::Refresh>,
     indentation: Real,
+    /// The contact's law over the sub-step where it is taken implicitly (a resting or slowly
+    /// moving contact, or a pair about to touch slowly); its forces above are then not applied.
+    resting: Option<crate::implicit::StepLaw>,
+    /// For a contact that began on this sub-step as an impact: how long it counts as one (s).
+    impact: Option<Real>,
+    /// The approach speed at the contact point (m/s; negative while separating).
+    approach: Real,
 }
 
 /// A candidate pair last found apart: the exact distance's margin over the contact
@@ -183,6 +194,8 @@ pub struct DiscreteContacts {
     stiffness: StiffnessFactor,
     geometry_reuse: Real,
     policy: StepPolicy,
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    integration: Integration,
     substeps_per_contact: Real,
     handled: HashMap<ColliderHandle, Handled>,
     /// Each handled collider's shape as f64 parry sees it, for the pairs' exact distances:
@@ -205,6 +218,13 @@ pub struct DiscreteContacts {
     /// The liquid film's force between handled pairs, when set.
     #[cfg_attr(feature = "checkpoint", serde(default))]
     lubrication: Option<Lubrication>,
+    /// The live contacts that are impacts (integrated explicitly under
+    /// [`Integration::Implicit`]), with how long each still counts as one (s).
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    impacts: HashMap<(ColliderHandle, ColliderHandle), Real>,
+    /// Steps taken: where an error says when it happened.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    steps: u64,
     /// Bumped whenever the handled set changes.
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     generation: u64,
@@ -263,6 +283,7 @@ impl DiscreteContacts {
             stiffness: StiffnessFactor::Curved,
             geometry_reuse: crate::contact::GEOMETRY_REUSE,
             policy: StepPolicy::AutoSubstep { max_substeps: 10_000 },
+            integration: Integration::Implicit,
             substeps_per_contact: SUBSTEPS_PER_CONTACT,
             handled: HashMap::default(),
             queries: HashMap::default(),
@@ -271,6 +292,8 @@ impl DiscreteContacts {
             periodic: None,
             indentation_limit: 0.5,
             lubrication: None,
+            impacts: HashMap::default(),
+            steps: 0,
             generation: 0,
             neighbours: Default::default(),
             set_aside: HashMap::default(),
@@ -353,6 +376,18 @@ impl DiscreteContacts {
     pub fn with_policy(mut self, policy: StepPolicy) -> Self {
         self.policy = policy;
         self
+    }
+
+    /// With another way of integrating the contacts (see [`Integration`]; the default is
+    /// [`Integration::Implicit`]).
+    pub fn with_integration(mut self, integration: Integration) -> Self {
+        self.integration = integration;
+        self
+    }
+
+    /// How the contacts are integrated.
+    pub fn integration(&self) -> Integration {
+        self.integration
     }
 
     /// With `n` sub-steps per Hertz contact time instead of [`SUBSTEPS_PER_CONTACT`] (at least
@@ -487,17 +522,23 @@ impl DiscreteContacts {
         let dt = real(world.integration_parameters.dt);
         check_positive("integration_parameters.dt", dt)?;
         self.restore_queries(world)?;
+        self.compute_masses(world);
         let builds = self.neighbour_builds();
+        let rest_speed = self.rest_speed(world, dt);
         let substeps = self.substeps_with(world, hooks, dt)?;
         let saved =
             (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
-        world.integration_parameters.dt = engine_real(dt / substeps as Real);
+        let h = dt / substeps as Real;
+        world.integration_parameters.dt = engine_real(h);
+        // One solver iteration: rapier then integrates each (sub-)step as one symplectic Euler
+        // step, `x += h v'`, the motion the contacts' forces were taken for (with n iterations
+        // it moves a body by `(n + 1)/2n` of the change of velocity's share).
         world.integration_parameters.num_solver_iterations = 1;
         let mut stats = StepStats { substeps, ..Default::default() };
         self.set_aside_collision_types(world);
         let mut result = Ok(());
         for k in 0..substeps {
-            if let Err(e) = self.apply_forces(world, hooks, &mut stats, k == 0) {
+            if let Err(e) = self.apply_forces(world, hooks, &mut stats, k == 0, (h, rest_speed)) {
                 result = Err(e);
                 break;
             }
@@ -507,11 +548,37 @@ impl DiscreteContacts {
         world.integration_parameters.dt = saved.0;
         world.integration_parameters.num_solver_iterations = saved.1;
         self.restore_collision_types(world);
+        self.steps += 1;
         result?;
         self.wrap_bodies(world);
         stats.contacts = self.states.len();
         stats.neighbour_builds = self.neighbour_builds() - builds;
         Ok(stats)
+    }
+
+    /// The speed (m/s) below which two bodies meet without an impact under
+    /// [`Integration::Implicit`]: the larger of [`AT_REST_SPEED`] and what gravity gives a
+    /// body in [`REST_STEPS`] steps of `dt`.
+    fn rest_speed(&self, world: &PhysicsWorld, dt: Real) -> Real {
+        AT_REST_SPEED.max(REST_STEPS * vector(world.gravity).length() * dt)
+    }
+
+    /// Computes the mass properties of the dynamic bodies of handled colliders that rapier has
+    /// not computed yet (it does so at the start of its step, after this crate's forces are
+    /// set): a body inserted since the last step then carries its weight from its first step.
+    fn compute_masses(&self, world: &mut PhysicsWorld) {
+        let PhysicsWorld { bodies, colliders, .. } = world;
+        let mut missing: Vec<RigidBodyHandle> = self
+            .handled
+            .keys()
+            .filter_map(|c| colliders.get(*c).and_then(|co| co.parent()))
+            .filter(|b| bodies.get(*b).is_some_and(|rb| rb.is_dynamic() && rb.mass() == 0.0))
+            .collect();
+        missing.sort_by_key(|b| b.into_raw_parts());
+        missing.dedup();
+        for b in missing {
+            bodies[b].recompute_mass_properties_from_colliders(colliders);
+        }
     }
 }
 

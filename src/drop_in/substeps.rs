@@ -61,12 +61,15 @@ impl DiscreteContacts {
             .max(STABLE_SUBSTEPS_PER_HALF_PERIOD);
         // `None` where no estimate comes out (no live contact between moving bodies, or a
         // degenerate network): each live contact's spring then counts alone.
-        let network = network::highest_frequency(self, world, spring);
+        // Implicit: resting contacts need no sub-step, nor their network.
+        let implicit = self.integration == Integration::Implicit;
+        let rest_speed = self.rest_speed(world, dt);
+        let network = if implicit { None } else { network::highest_frequency(self, world, spring) };
         for (ca, cb) in self.lookahead_pairs(world, hooks, dt)? {
             let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
-            let ColliderMotion { pose: pa, kinematics: ka, mass: ma, .. } =
+            let ColliderMotion { pose: pa, kinematics: ka, mass: ma, acceleration: aa, .. } =
                 Self::kinematics(world, ca);
-            let ColliderMotion { pose: pb, kinematics: kb, mass: mb, .. } =
+            let ColliderMotion { pose: pb, kinematics: kb, mass: mb, acceleration: ab, .. } =
                 Self::kinematics(world, cb);
             let m_star = 1.0 / (1.0 / ma + 1.0 / mb);
             // Two immovable bodies, or a mass rapier has not computed yet (before its first step).
@@ -103,6 +106,19 @@ impl DiscreteContacts {
                 (ka.linvel - kb.linvel).dot(towards_b).max(0.0) + rims
             };
             let v_normal = approach.max(AT_REST_SPEED);
+            // Implicit: only impacts — a live one, or a pair that may meet at the rest speed
+            // or faster within the step.
+            if implicit {
+                let impact = match self.contact(ca, cb) {
+                    Some(_) => {
+                        self.impacts.contains_key(&(ca, cb)) || self.impacts.contains_key(&(cb, ca))
+                    }
+                    None => approach + (aa - ab).length() * dt >= rest_speed,
+                };
+                if !impact {
+                    continue;
+                }
+            }
             // The largest coordinate of the bodies that move, whose spacing in rapier's numbers
             // bounds what a sub-step can resolve.
             let largest = [(pa.translation, ma), (pb.translation, mb)]

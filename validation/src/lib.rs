@@ -8,6 +8,7 @@ pub mod hertz;
 pub mod hindered_settling;
 pub mod precision;
 pub mod stability;
+pub mod stacks;
 pub mod wet_rebound;
 
 /// Loads a validation run saved under `kind` and checks that it holds `case`: the one rule
