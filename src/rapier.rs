@@ -81,6 +81,10 @@ mod boundary {
     pub(super) fn pose(p: &e::Pose) -> c::Pose {
         *p
     }
+    /// The model's pose as rapier's.
+    pub(super) fn engine_pose(p: &c::Pose) -> e::Pose {
+        *p
+    }
     /// A rapier collider's shape as f64 parry's: rapier's own.
     pub(super) fn query_shape(
         co: &super::engine::prelude::Collider,

@@ -79,6 +79,10 @@ mod boundary {
     pub(super) fn pose(p: &e::Pose) -> c::Pose {
         c::Pose::from_parts(p.translation.into(), p.rotation.as_dquat())
     }
+    /// The model's pose as rapier's.
+    pub(super) fn engine_pose(p: &c::Pose) -> e::Pose {
+        e::Pose::from_parts(p.translation.as_vec3(), p.rotation.as_quat())
+    }
     /// A rapier collider's shape as f64 parry's: its numbers widened
     /// ([`widen_f32`](crate::shape::widen_f32)).
     pub(super) fn query_shape(

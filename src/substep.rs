@@ -34,7 +34,8 @@ pub enum Integration {
     /// leave: its force taken where the step ends, stable at any stiffness. A resting scene
     /// steps at rapier's step. An impact is a contact that began at the rest speed or faster,
     /// for [`IMPACT_WINDOW`] Hertz contact times and until its normal motion falls below the
-    /// rest speed. The default.
+    /// rest speed. Contacts with an enlargement or a liquid film (wet runs) are integrated
+    /// explicitly. The default.
     #[default]
     Implicit,
     /// Every contact explicitly, in sub-steps of the stiffest contact's period — a resting
@@ -117,6 +118,9 @@ pub struct StepStats {
     pub approaching_contacts: usize,
     /// Islands of bodies solved implicitly, summed over the sub-steps.
     pub islands: usize,
+    /// Sub-steps of the impacts' own bodies ([`Integration::Implicit`]), summed over their
+    /// groups and the step's sub-steps.
+    pub impact_substeps: usize,
 }
 
 impl StepStats {

@@ -263,11 +263,12 @@ impl ContactModel {
                 geometry.map(|g| {
                     let relative = relative_pose(&a.pose, &b.pose);
                     let (geometry, approach) = self.placed(g, a, b);
+                    let tangential = self.first_stretch(&geometry, approach, a, b);
                     let s = state.insert(ContactState {
                         damping: self.params.damping_for(approach),
                         reference_approach_speed: approach,
                         corrected_box: geometry.corrected_box,
-                        tangential: TangentialHistory::default(),
+                        tangential,
                         normal_stiffness: 0.0,
                         reference: None,
                         frame: None,
@@ -337,6 +338,33 @@ impl ContactModel {
             Some(why) => self.respond(a, b, &relative, s, geometry, why),
             None => self.respond_updated(a, b, s, geometry),
         }))
+    }
+
+    /// The tangential spring of a contact found at its first evaluation with `geometry`,
+    /// approaching at `approach`: the bodies touched `d / ḋ` earlier, at the approach they
+    /// close with, and the spring has been stretched by their tangential slip since — where
+    /// the first evaluation falls late in a step or sub-step, a spring started unstretched
+    /// would miss that slip and its force for the whole impact. Unstretched under the
+    /// slip-speed law, or where the bodies do not approach.
+    fn first_stretch<A: Sdf + ?Sized, B: Sdf + ?Sized>(
+        &self,
+        geometry: &OverlapGeometry,
+        approach: Real,
+        a: &BodyState<'_, A>,
+        b: &BodyState<'_, B>,
+    ) -> TangentialHistory {
+        let (x, n, d) = (geometry.contact_point, geometry.normal, geometry.indentation);
+        if self.params.tangential != crate::TangentialLaw::Spring
+            || self.params.friction.is_none()
+            || !(approach > 0.0 && d > 0.0)
+        {
+            return TangentialHistory::default();
+        }
+        let u = a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x);
+        let slip = (u - n * n.dot(u)) * (d / approach);
+        let mut history = TangentialHistory::default();
+        history.record(slip, false, x, &a.pose, &b.pose);
+        history
     }
 
     /// The geometry with its contact point placed for balls and bodies of revolution (see

@@ -2,6 +2,7 @@
 //! torques summed in the candidates' order and put on the bodies; periodic wrapping.
 
 use super::*;
+use crate::force::{elastic_force, volume_exponent};
 use crate::lubrication::{film_radius_at, reduced_radius};
 
 impl DiscreteContacts {
@@ -155,11 +156,10 @@ impl DiscreteContacts {
             .with_stiffness(self.stiffness)
     }
 
-    /// Computes and adds the contact forces of all handled candidate pairs over a sub-step of
-    /// `h`; leaves in the sub-step buffers' `applied` each body's force and torque as they were
-    /// before (for [`take_back`]). `first`: the step's first sub-step, which keeps the
-    /// remembered gaps of this sub-step's candidates only. `rest_speed`: the speed below which
-    /// a pair meets without an impact ([`Integration::Implicit`]).
+    /// Computes and adds the contact forces of all handled candidate pairs over a sub-step
+    /// (`pass.h`); leaves in the sub-step buffers' `applied` each body's force and torque as
+    /// they were before (for [`take_back`]). `first`: the step's first sub-step, which keeps
+    /// the remembered gaps of this sub-step's candidates only.
     ///
     /// Pairs are evaluated in parallel (feature `parallel`) and their forces summed in the
     /// candidates' order afterwards, so the result does not depend on the thread count. Each
@@ -167,20 +167,21 @@ impl DiscreteContacts {
     /// evaluated, and moved back while the contact lives; the contacts of pairs that are no
     /// longer candidates end. The lists a sub-step fills are kept between sub-steps.
     ///
-    /// Under [`Integration::Implicit`] the contacts that are not impacts, and the pairs that
-    /// will touch slowly within the sub-step, are not applied as evaluated: their laws over the
-    /// sub-step go to the islands' implicit solve (see `islands`), with every other force of
-    /// the sub-step on their bodies, and the impulses it finds are applied instead.
+    /// Under [`Integration::Implicit`] the impacts are resolved first, each group of bodies
+    /// they join in sub-steps of its own (see `impacts`), and every other contact and pair
+    /// about to touch goes to the islands' implicit solve (see `islands`) with every other
+    /// force of the sub-step on its bodies; the impulses found are applied as forces over the
+    /// sub-step, and the impacts' bodies placed where their sub-steps took them.
     pub(super) fn apply_forces(
         &mut self,
         world: &mut PhysicsWorld,
         hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
         first: bool,
-        (h, rest_speed): (Real, Real),
+        pass: Pass,
     ) -> Result<()> {
         let mut buffers = std::mem::take(&mut self.buffers);
-        let result = self.forces_into(world, hooks, stats, first, (h, rest_speed), &mut buffers);
+        let result = self.forces_into(world, hooks, stats, first, pass, &mut buffers);
         self.buffers = buffers;
         result
     }
@@ -192,215 +193,40 @@ impl DiscreteContacts {
         hooks: &dyn PhysicsHooks,
         stats: &mut StepStats,
         first: bool,
-        (h, rest_speed): (Real, Real),
+        pass: Pass,
         buffers: &mut SubstepBuffers,
     ) -> Result<()> {
         let SubstepBuffers { pairs, slots, checks, added, applied } = buffers;
-        let implicit = self.integration == Integration::Implicit;
-        if implicit {
+        let h = pass.h;
+        if pass.resting {
             self.candidates_within(world, hooks, h, pairs)?;
         } else {
             self.candidate_pairs(world, hooks, pairs)?;
         }
         slots.clear();
         slots.extend(pairs.iter().map(|&(ca, cb, _)| self.states.remove(&(ca, cb))));
-        let eps = self.settings.enlargement();
-        let this = &*self;
-        let w = &*world;
-        let evaluate = |(&(ca, cb, shift), slot): (&Candidate, &mut Option<Box<ContactState>>)|
-         -> Result<Checked> {
-            let (ha, hb) = (&this.handled[&ca], &this.handled[&cb]);
-            let ma = Self::kinematics(w, ca);
-            let mut mb = Self::kinematics(w, cb);
-            // B's nearest image (periodic boxes); a rigid shift changes no force or torque.
-            mb.pose.translation += shift;
-            mb.kinematics.center_of_mass += shift;
-            let (pa, ka, ba, pb, kb, bb) = (ma.pose, ma.kinematics, ma.body, mb.pose, mb.kinematics, mb.body);
-            let (sa, sb) = (this.queries[&ca].as_ref(), this.queries[&cb].as_ref());
-            let film = |pb: &Pose, kb: &BodyKinematics, nearest| {
-                this.film(ha, hb, (&pa, sa, &ka, ba), (pb, sb, kb, bb), nearest)
-            };
-            let sides = || {
-                let side = |handled, m: &ColliderMotion, shape| islands::Side {
-                    handled,
-                    pose: m.pose,
-                    shape,
-                    kinematics: m.kinematics,
-                    acceleration: m.acceleration,
-                };
-                (side(ha, &ma, sa), side(hb, &mb, sb))
-            };
-            // How far the pair may close within the sub-step, beyond the contact's reach
-            // (implicit: a pair about to touch gets its law now).
-            let travel = || {
-                let (a, b) = sides();
-                a.travel(h) + b.travel(h)
-            };
-            // The pair's parameters: the spring's damping needs the pair's tangential mass; a
-            // body whose mass rapier has not computed yet (zero before its first step) leaves
-            // it unknown.
-            let pair_params = || -> Result<PairParameters> {
-                let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
-                if m_t > 0.0 {
-                    this.params(ha, hb)?.with_tangential_mass(m_t)
-                } else {
-                    this.params(ha, hb)
-                }
-            };
-            // A pair about to touch slowly: its law over the sub-step, from a probe.
-            let approaching = |film: Option<Film>| -> Result<Checked> {
-                let (a, b) = sides();
-                let law = this.approaching_law(&pair_params()?, &a, &b, h, rest_speed);
-                let resting = law.map(|law| Evaluated {
-                    bodies: (ba, bb),
-                    force_on_a: Vector::ZERO,
-                    torques: (Vector::ZERO, Vector::ZERO),
-                    refresh: None,
-                    indentation: 0.0,
-                    resting: Some(law),
-                    impact: None,
-                    approach: 0.0,
-                });
-                Ok((resting, GapCheck::Closed, film))
-            };
-            // A live contact is evaluated (it ends there when the bodies part). Other pairs:
-            // a lower bound of their distance (`separation`) rules out those that do not touch
-            // for a fraction of an evaluation's cost, and a pair found apart stays apart
-            // without one while the bodies have moved less than its margin (and, implicit,
-            // cannot close it within the sub-step).
-            let live = slot.is_some();
-            // The tangential spring as the evaluation will find it, for an implicit law.
-            let history = slot.as_ref().map(|s| s.tangential);
-            if !live {
-                let ahead = if implicit { travel() } else { 0.0 };
-                if let Some(gap) = this.gaps.get(&(ca, cb)) {
-                    if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) + ahead
-                        < gap.margin
-                    {
-                        return Ok((None, GapCheck::Kept, None));
-                    }
-                }
-                let (distance, nearest) =
-                    separation((&pa, sa, &ha.shape), (&pb, sb, &hb.shape));
-                let margin = distance - this.reach();
-                if margin > ahead {
-                    return Ok((None, GapCheck::Found(Gap { margin, poses: (pa, pb) }), None));
-                }
-                if distance - (eps[0] + eps[1]) > 0.0 {
-                    // Within the film's reach, not in contact: the film's gap is the nearest
-                    // points' (a half-space's contact is parry's own, exact for it).
-                    let bounded = ha.radius.is_finite() && hb.radius.is_finite();
-                    let nearest = nearest.filter(|_| bounded);
-                    let film = film(&pb, &kb, nearest);
-                    if implicit {
-                        return approaching(film);
-                    }
-                    return Ok((None, GapCheck::Closed, film));
-                }
-            }
-            let film = film(&pb, &kb, None);
-            let params = pair_params()?;
-            let model = ContactModel::new(params, this.settings)
-                .with_geometry_reuse(this.geometry_reuse)?;
-            let (body_a, body_b) = (
-                BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
-                BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
-            );
-            // A live contact's boxed state is evaluated where it lies (a state is ~1 kB).
-            let out = match slot {
-                Some(boxed) => model.evaluate_live(&body_a, &body_b, boxed)?,
-                None => {
-                    let mut state = None;
-                    let out = model.evaluate(&body_a, &body_b, &mut state)?;
-                    *slot = state.map(Box::new);
-                    out
-                }
-            };
-            let Some(out) = out else {
-                *slot = None;
-                // Touching without an overlap yet (boxes stacked exactly touching).
-                if implicit && !live {
-                    return approaching(film);
-                }
-                return Ok((None, GapCheck::Closed, film));
-            };
-            let f = out.force;
-            let state = slot.as_deref().expect("a live contact has a state");
-            // Implicit: an impact is a contact that began at the rest speed or faster, while
-            // its window lasts; every other contact is resting.
-            let impact = !implicit
-                || if live {
-                    this.impacts.contains_key(&(ca, cb))
-                } else {
-                    state.reference_approach_speed >= rest_speed
-                };
-            let window = (implicit && impact && !live).then(|| {
-                let m_star = 1.0 / (1.0 / ma.mass + 1.0 / mb.mass);
-                let r_star = 1.0 / (1.0 / ha.radius + 1.0 / hb.radius);
-                let e_star = effective_modulus(&ha.material, &hb.material);
-                IMPACT_WINDOW * hertz_contact_time(m_star, r_star, e_star, state.reference_approach_speed)
-            });
-            let resting = (!impact)
-                .then(|| {
-                let carried = history.map_or((Vector::ZERO, false), |t| {
-                    (t.carried(&pa, &pb, out.geometry.normal), t.sliding)
-                });
-                let (a, b) = sides();
-                this.resting_law(&params, (&out, state, carried), (&a, &b), (h, rest_speed))
-            });
-            let evaluated = Evaluated {
-                bodies: (ba, bb),
-                force_on_a: f.force_on_a,
-                torques: (f.torque_on_a, f.torque_on_b),
-                refresh: out.refresh,
-                indentation: out.geometry.indentation,
-                resting,
-                impact: window,
-                approach: f.approach_speed,
-            };
-            Ok((Some(evaluated), GapCheck::Closed, film))
-        };
-        #[cfg(feature = "parallel")]
         {
-            use rayon::prelude::*;
-            pairs.par_iter().zip(slots.par_iter_mut()).map(evaluate).collect_into_vec(checks);
-        }
-        #[cfg(not(feature = "parallel"))]
-        {
-            checks.clear();
-            checks.extend(pairs.iter().zip(slots.iter_mut()).map(evaluate));
-        }
-
-        // The live contacts go back to the map (on an error too, as far as they were updated).
-        let put_back = |states: &mut HashMap<_, _>, slots: &mut Vec<Option<Box<ContactState>>>| {
-            for (&(ca, cb, _), slot) in pairs.iter().zip(slots.drain(..)) {
-                if let Some(state) = slot {
-                    states.insert((ca, cb), state);
-                }
+            let this = &*self;
+            let w = &*world;
+            let evaluate = |(&pair, slot): (&Candidate, &mut Option<Box<ContactState>>)| {
+                let motions = (Self::kinematics(w, pair.0), Self::kinematics(w, pair.1));
+                this.check_pair(w, pair, motions, slot, pass)
+            };
+            #[cfg(feature = "parallel")]
+            {
+                use rayon::prelude::*;
+                pairs.par_iter().zip(slots.par_iter_mut()).map(evaluate).collect_into_vec(checks);
             }
-        };
-        if let Some(k) = checks.iter().position(|e| e.is_err()) {
-            put_back(&mut self.states, slots);
-            return Err(checks.swap_remove(k).err().expect("an error was found"));
+            #[cfg(not(feature = "parallel"))]
+            {
+                checks.clear();
+                checks.extend(pairs.iter().zip(slots.iter_mut()).map(evaluate));
+            }
         }
-        self.states.clear();
-        put_back(&mut self.states, slots);
+        self.put_back(pairs, slots, checks)?;
 
         // Each body's sum runs in the candidates' order, whichever thread evaluated them.
         added.clear();
-        // A pair's force on A (B takes minus it) and its torques on A and B, to its bodies.
-        let add = |added: &mut HashMap<RigidBodyHandle, (Vector, Vector)>,
-                   bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
-                   f: Vector,
-                   torques: (Vector, Vector)| {
-            for (h, f, t) in [(bodies.0, f, torques.0), (bodies.1, -f, torques.1)] {
-                if let Some(h) = h {
-                    let e = added.entry(h).or_insert((Vector::ZERO, Vector::ZERO));
-                    e.0 += f;
-                    e.1 += t;
-                }
-            }
-        };
         // The step's first sub-step keeps the gaps of its candidates only; the others update
         // them in place.
         let mut gaps = if first {
@@ -409,7 +235,9 @@ impl DiscreteContacts {
             std::mem::take(&mut self.gaps)
         };
         let mut resting: Vec<islands::Resting> = Vec::new();
-        for (e, &(ca, cb, _)) in checks.iter().zip(pairs.iter()) {
+        let mut colliding: Vec<Candidate> = Vec::new();
+        let mut apart: Vec<Candidate> = Vec::new();
+        for (e, &(ca, cb, shift)) in checks.iter().zip(pairs.iter()) {
             let Ok((contact, gap, film)) = e else { unreachable!("errors were returned above") };
             match gap {
                 GapCheck::Kept if first => {
@@ -427,34 +255,62 @@ impl DiscreteContacts {
             if let Some(Film { bodies, force_on_a, torque_on_a, torque_on_b }) = film {
                 add(added, *bodies, *force_on_a, (*torque_on_a, *torque_on_b));
             }
-            let Some(c) = contact else { continue };
-            if let Some(law) = &c.resting {
-                resting.push(islands::Resting { law: *law, bodies: c.bodies, pair: (ca, cb) });
-                if self.states.contains_key(&(ca, cb)) {
-                    stats.evaluations += 1;
-                } else {
-                    stats.approaching_contacts += 1;
+            let Some(c) = contact else {
+                apart.push((ca, cb, shift));
+                continue;
+            };
+            match &c.treatment {
+                Treatment::Resting(law) => {
+                    resting.push(islands::Resting {
+                        law: *law,
+                        bodies: c.bodies,
+                        pair: (ca, cb),
+                        shift,
+                    });
+                    if self.states.contains_key(&(ca, cb)) {
+                        stats.evaluations += 1;
+                    } else {
+                        stats.approaching_contacts += 1;
+                    }
                 }
-            } else {
-                stats.evaluations += 1;
-                add(added, c.bodies, c.force_on_a, c.torques);
+                Treatment::Explicit => {
+                    stats.evaluations += 1;
+                    add(added, c.bodies, c.force_on_a, c.torques);
+                }
+                Treatment::Impact => colliding.push((ca, cb, shift)),
             }
             if let Some(why) = c.refresh {
                 stats.refreshes.count(why);
             }
             stats.max_indentation = stats.max_indentation.max(c.indentation);
+            if self.states.contains_key(&(ca, cb)) && !matches!(c.treatment, Treatment::Impact) {
+                self.elastic.insert((ca, cb), c.elastic);
+                self.note_depth((ca, cb), c.indentation);
+            }
         }
         self.gaps = gaps;
-        self.track_impacts(checks, pairs, h, rest_speed);
+        self.track_impacts(checks, pairs, h, pass.rest_speed, !pass.resting);
+        // The impacts, each group of bodies on its own: their contacts' impulses over the
+        // sub-step, and where the bodies end it.
+        let placed = if colliding.is_empty() {
+            Vec::new()
+        } else {
+            self.resolve_impacts(world, &colliding, &mut resting, &apart, pass, stats, added)?
+        };
         if !resting.is_empty() {
-            let (responses, islands) = self.solve_islands(world, &mut resting, added, h)?;
+            let bodies = |b: RigidBodyHandle| {
+                islands::moves_in_islands(world, b)
+                    .then(|| islands::island_body(world, b, added, h))
+            };
+            let (responses, islands) = self.solve_islands(world, &mut resting, &bodies, h)?;
             stats.implicit_contacts += resting.len();
             stats.islands += islands;
             for (r, (response, relative)) in resting.iter().zip(responses) {
                 let [on_a, on_b] = r.law.on_bodies(&response);
                 add(added, r.bodies, on_a.0 / h, (on_a.1 / h, on_b.1 / h));
-                let depth = r.law.normal_law.depth - h * r.law.normal.dot(relative.0);
+                let depth = r.law.normal_law.depth - h * r.law.normal.dot(relative.0 .0);
                 stats.max_indentation = stats.max_indentation.max(depth);
+                self.note_depth(r.pair, depth);
                 if let Some((stretch, sliding)) =
                     islands::spring_after(&r.law, &response, h, relative)
                 {
@@ -466,48 +322,294 @@ impl DiscreteContacts {
             }
         }
         applied.clear();
-        for (&h, &(f, t)) in added.iter() {
-            if let Some(rb) = world.bodies.get_mut(h) {
+        for (&b, &(f, t)) in added.iter() {
+            if let Some(rb) = world.bodies.get_mut(b) {
                 if rb.is_dynamic() {
-                    applied.push((h, rb.user_force(), rb.user_torque()));
+                    applied.push((b, rb.user_force(), rb.user_torque()));
                     rb.add_force(engine_vector(f), true);
                     rb.add_torque(engine_vector(t), true);
+                }
+            }
+        }
+        // An impact's bodies start rapier's step where, moving with their end velocities
+        // over the step, they end where their own sub-steps took them.
+        for (b, pose) in placed {
+            let rb = &mut world.bodies[b];
+            rb.set_position(boundary::engine_pose(&pose), true);
+            let moved = *rb.position();
+            for &c in rb.colliders() {
+                if let Some(co) = world.colliders.get_mut(c) {
+                    if let Some(relative) = co.position_wrt_parent().copied() {
+                        co.set_position(moved * relative);
+                    }
                 }
             }
         }
         Ok(())
     }
 
+    /// Moves the candidates' contact states back to the map after their checks (on an error
+    /// too, as far as they were updated, and then returns the first error); the states of
+    /// pairs that are no longer candidates end.
+    pub(super) fn put_back(
+        &mut self,
+        pairs: &[Candidate],
+        slots: &mut Vec<Option<Box<ContactState>>>,
+        checks: &mut Vec<Result<Checked>>,
+    ) -> Result<()> {
+        let keep = |states: &mut HashMap<_, _>, slots: &mut Vec<Option<Box<ContactState>>>| {
+            for (&(ca, cb, _), slot) in pairs.iter().zip(slots.drain(..)) {
+                if let Some(state) = slot {
+                    states.insert((ca, cb), state);
+                }
+            }
+        };
+        if let Some(k) = checks.iter().position(|e| e.is_err()) {
+            keep(&mut self.states, slots);
+            return Err(checks.swap_remove(k).err().expect("an error was found"));
+        }
+        self.states.clear();
+        keep(&mut self.states, slots);
+        Ok(())
+    }
+
+    /// Checks the candidate `(ca, cb, shift)`, its colliders moving as `motions` (B's not yet
+    /// shifted to its image), with its contact state in `slot`: its contact evaluated, or
+    /// where it is apart, its gap, its film, and — under `pass.resting` — the law of a resting
+    /// contact or of a pair about to touch, or that it is an impact.
+    pub(super) fn check_pair(
+        &self,
+        w: &PhysicsWorld,
+        (ca, cb, shift): Candidate,
+        (ma, mut mb): (ColliderMotion, ColliderMotion),
+        slot: &mut Option<Box<ContactState>>,
+        pass: Pass,
+    ) -> Result<Checked> {
+        let Pass { h, rest_speed, resting: implicit, .. } = pass;
+        let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
+        // B's nearest image (periodic boxes); a rigid shift changes no force or torque.
+        mb.pose.translation += shift;
+        mb.kinematics.center_of_mass += shift;
+        let (pa, ka, ba, pb, kb, bb) =
+            (ma.pose, ma.kinematics, ma.body, mb.pose, mb.kinematics, mb.body);
+        let (sa, sb) = (self.queries[&ca].as_ref(), self.queries[&cb].as_ref());
+        let film = |pb: &Pose, kb: &BodyKinematics, nearest| {
+            self.film(ha, hb, (&pa, sa, &ka, ba), (pb, sb, kb, bb), nearest)
+        };
+        let side = |handled, m: &ColliderMotion, shape| islands::Side {
+            handled,
+            pose: m.pose,
+            shape,
+            kinematics: m.kinematics,
+            acceleration: m.acceleration,
+        };
+        let (a, b) = (side(ha, &ma, sa), side(hb, &mb, sb));
+        // The pair's parameters: the spring's damping needs the pair's tangential mass; a
+        // body whose mass rapier has not computed yet (zero before its first step) leaves
+        // it unknown.
+        let pair_params = || -> Result<PairParameters> {
+            let m_t = Self::tangential_mass(w, (ca, ha), (cb, hb));
+            if m_t > 0.0 {
+                self.params(ha, hb)?.with_tangential_mass(m_t)
+            } else {
+                self.params(ha, hb)
+            }
+        };
+        let untouched = |treatment| Evaluated {
+            bodies: (ba, bb),
+            force_on_a: Vector::ZERO,
+            torques: (Vector::ZERO, Vector::ZERO),
+            refresh: None,
+            indentation: 0.0,
+            treatment,
+            impact: None,
+            approach: 0.0,
+            elastic: 0.0,
+        };
+        // A pair about to touch: slowly, its law over the sub-step from a probe; fast, an
+        // impact.
+        let approaching = |film: Option<Film>| -> Result<Checked> {
+            let treatment = match self.approaching_law(&pair_params()?, &a, &b, h, rest_speed) {
+                islands::Approach::Resting(law) => Some(Treatment::Resting(law)),
+                // Inside an impact's sub-steps a pair about to meet fast is left to the next
+                // sub-steps, which resolve its approach.
+                islands::Approach::Impact if !pass.sub_cycle => Some(Treatment::Impact),
+                _ => None,
+            };
+            Ok((treatment.map(untouched), GapCheck::Closed, film))
+        };
+        let live = slot.is_some();
+        // An impact under way is resolved in its own sub-steps.
+        let impact = live && self.impacts.contains_key(&(ca, cb));
+        if implicit && impact && !pass.sub_cycle {
+            return Ok((Some(untouched(Treatment::Impact)), GapCheck::Closed, None));
+        }
+        // The tangential spring as the evaluation will find it, for an implicit law.
+        let history = slot.as_ref().map(|s| s.tangential);
+        // A live contact is evaluated (it ends there when the bodies part). Other pairs: a
+        // lower bound of their distance (`separation`) rules out those that do not touch for
+        // a fraction of an evaluation's cost, and a pair found apart stays apart without one
+        // while the bodies have moved less than its margin (and, implicit, cannot close it
+        // within the sub-step).
+        if !live {
+            let ahead = if implicit { a.travel(h) + b.travel(h) } else { 0.0 };
+            if let Some(gap) = self.gaps.get(&(ca, cb)) {
+                if moved(ha, &gap.poses.0, &pa) + moved(hb, &gap.poses.1, &pb) + ahead < gap.margin
+                {
+                    return Ok((None, GapCheck::Kept, None));
+                }
+            }
+            let (distance, nearest) = separation((&pa, sa, &ha.shape), (&pb, sb, &hb.shape));
+            let margin = distance - self.reach();
+            if margin > ahead {
+                return Ok((None, GapCheck::Found(Gap { margin, poses: (pa, pb) }), None));
+            }
+            let eps = self.settings.enlargement();
+            if distance - (eps[0] + eps[1]) > 0.0 {
+                // Within the film's reach, not in contact: the film's gap is the nearest
+                // points' (a half-space's contact is parry's own, exact for it).
+                let bounded = ha.radius.is_finite() && hb.radius.is_finite();
+                let nearest = nearest.filter(|_| bounded);
+                let film = film(&pb, &kb, nearest);
+                if implicit {
+                    return approaching(film);
+                }
+                return Ok((None, GapCheck::Closed, film));
+            }
+        }
+        let film = film(&pb, &kb, None);
+        let params = pair_params()?;
+        let model =
+            ContactModel::new(params, self.settings).with_geometry_reuse(self.geometry_reuse)?;
+        let (body_a, body_b) = (
+            BodyState { shape: &ha.shape, pose: pa, kinematics: ka },
+            BodyState { shape: &hb.shape, pose: pb, kinematics: kb },
+        );
+        // A live contact's boxed state is evaluated where it lies (a state is ~1 kB).
+        let out = match slot {
+            Some(boxed) => model.evaluate_live(&body_a, &body_b, boxed)?,
+            None => {
+                let mut state = None;
+                let out = model.evaluate(&body_a, &body_b, &mut state)?;
+                *slot = state.map(Box::new);
+                out
+            }
+        };
+        let Some(out) = out else {
+            *slot = None;
+            // Touching without an overlap yet (boxes stacked exactly touching).
+            if implicit && !live {
+                return approaching(film);
+            }
+            return Ok((None, GapCheck::Closed, film));
+        };
+        let f = out.force;
+        let state = slot.as_deref().expect("a live contact has a state");
+        // Under implicit integration a contact that begins at the rest speed or faster is an
+        // impact for its window; every other contact outside an impact's sub-steps is resting.
+        let window =
+            (pass.impacts && !live && state.reference_approach_speed >= rest_speed).then(|| {
+                let m_star = 1.0 / (1.0 / ma.mass + 1.0 / mb.mass);
+                let r_star = 1.0 / (1.0 / ha.radius + 1.0 / hb.radius);
+                let e_star = effective_modulus(&ha.material, &hb.material);
+                let t_h =
+                    hertz_contact_time(m_star, r_star, e_star, state.reference_approach_speed);
+                IMPACT_WINDOW * t_h
+            });
+        let treatment = if !implicit || pass.sub_cycle && (impact || window.is_some()) {
+            Treatment::Explicit
+        } else if window.is_some() {
+            Treatment::Impact
+        } else {
+            let carried = history.map_or((Vector::ZERO, false), |t| {
+                (t.carried(&pa, &pb, out.geometry.normal), t.sliding)
+            });
+            Treatment::Resting(self.resting_law(
+                &params,
+                (&out, state, carried),
+                (&a, &b),
+                (h, rest_speed),
+            ))
+        };
+        let g = &out.geometry;
+        let q =
+            0.5 * (1.0 + volume_exponent(g.volume, g.indentation, g.surface_area).clamp(1.0, 2.0));
+        let evaluated = Evaluated {
+            bodies: (ba, bb),
+            force_on_a: f.force_on_a,
+            torques: (f.torque_on_a, f.torque_on_b),
+            refresh: out.refresh,
+            indentation: g.indentation,
+            treatment,
+            impact: window,
+            approach: f.approach_speed,
+            elastic: elastic_force(&params, g) * g.indentation / (q + 1.0),
+        };
+        Ok((Some(evaluated), GapCheck::Closed, film))
+    }
+
     /// Keeps the impacts' record (implicit integration) after a sub-step of `h`: a contact that
-    /// began as an impact is entered with its window, every impact's window shortens by `h`,
-    /// and an impact leaves when its contact has ended, or its window has passed and its
-    /// normal motion is slower than `rest_speed`.
-    fn track_impacts(
+    /// began as an impact is entered with its window, and — where the sub-step resolved the
+    /// impacts (`resolved`; not the world's step whose impacts their own sub-steps resolve)
+    /// — every impact's window shortens by `h`, and an impact leaves when its contact has
+    /// ended, or its window has passed and its normal motion is slower than `rest_speed`.
+    /// Pairs not checked keep their record.
+    pub(super) fn track_impacts(
         &mut self,
         checks: &[Result<Checked>],
         pairs: &[Candidate],
         h: Real,
         rest_speed: Real,
+        resolved: bool,
     ) {
-        if self.integration != Integration::Implicit {
+        if !self.implicit() {
             self.impacts.clear();
             return;
         }
-        let mut impacts = std::mem::take(&mut self.impacts);
-        let mut kept = HashMap::with_capacity_and_hasher(impacts.len(), Default::default());
         for (e, &(ca, cb, _)) in checks.iter().zip(pairs) {
-            let Ok((Some(c), _, _)) = e else { continue };
-            if c.resting.is_some() || !self.states.contains_key(&(ca, cb)) {
-                continue;
-            }
-            let window = c.impact.or_else(|| impacts.remove(&(ca, cb)));
-            if let Some(left) = window.map(|w| w - h) {
-                if left > 0.0 || c.approach.abs() >= rest_speed {
-                    kept.insert((ca, cb), left);
+            let pair = (ca, cb);
+            let live = self.states.contains_key(&pair);
+            match e {
+                Ok((Some(c), _, _)) if live => {
+                    if matches!(c.treatment, Treatment::Resting(_)) {
+                        self.impacts.remove(&pair);
+                        continue;
+                    }
+                    let window = c.impact.or_else(|| self.impacts.get(&pair).copied());
+                    let Some(window) = window else { continue };
+                    if !resolved {
+                        self.impacts.insert(pair, window);
+                        continue;
+                    }
+                    let left = window - h;
+                    if left > 0.0 || c.approach.abs() >= rest_speed {
+                        self.impacts.insert(pair, left);
+                    } else {
+                        self.impacts.remove(&pair);
+                    }
+                }
+                // Not in contact (or not checked: an error).
+                _ => {
+                    self.impacts.remove(&pair);
                 }
             }
         }
-        self.impacts = kept;
+    }
+}
+
+/// A pair's force on A (B takes minus it) and its torques on A and B, added to its bodies'.
+pub(super) fn add(
+    added: &mut HashMap<RigidBodyHandle, (Vector, Vector)>,
+    bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
+    f: Vector,
+    torques: (Vector, Vector),
+) {
+    for (b, f, t) in [(bodies.0, f, torques.0), (bodies.1, -f, torques.1)] {
+        if let Some(b) = b {
+            let e = added.entry(b).or_insert((Vector::ZERO, Vector::ZERO));
+            e.0 += f;
+            e.1 += t;
+        }
     }
 }
 
@@ -552,7 +654,7 @@ pub(super) fn film_contact(
 /// it is a lower bound of the distance at any size (within 1e-3 of it for the pairs of the
 /// test below, where parry's own is up to a third long at 1 mm). Shapes without a
 /// support map (a half-space) take the nearest points' distance, which for them is exact.
-fn separation(
+pub(super) fn separation(
     (pa, sa, a): (&Pose, &dyn parry3d_f64::shape::Shape, &ConvexShape),
     (pb, sb, b): (&Pose, &dyn parry3d_f64::shape::Shape, &ConvexShape),
 ) -> (Real, Option<(Vector, Vector)>) {

@@ -8,7 +8,9 @@ use super::forces::film_contact;
 use super::*;
 use crate::contact::ContactOutput;
 use crate::force::{elastic_force, normal_stiffness, rocking_damping_rate, volume_exponent};
-use crate::implicit::{self, IslandBody, Motion, NormalLaw, Response, SpringLaw, StepLaw};
+use crate::implicit::{
+    self, IslandBody, JointLaw, Law, Motion, NormalLaw, Response, SpringLaw, StepLaw,
+};
 use crate::math::Matrix;
 use crate::overlap::compute_overlap;
 
@@ -17,13 +19,15 @@ use crate::overlap::compute_overlap;
 pub(super) struct Resting {
     pub(super) law: StepLaw,
     pub(super) bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
-    /// The pair.
+    /// The pair, and the shift to B's image nearest A.
     pub(super) pair: (ColliderHandle, ColliderHandle),
+    pub(super) shift: Vector,
 }
 
-/// What a sub-step's islands gave: each resting contact's response and the relative motion
-/// at its contact at the end of the sub-step, in the order given.
-pub(super) type Responses = Vec<(Response, Motion)>;
+/// What a sub-step's islands gave: each resting contact's response, the relative motion at
+/// its contact at the end of the sub-step and its two ends' velocities then, in the order
+/// given.
+pub(super) type Responses = Vec<(Response, (Motion, [Motion; 2]))>;
 
 impl DiscreteContacts {
     /// The law of a live contact evaluated as `out`, with parameters `params`, state `state`,
@@ -136,6 +140,19 @@ impl DiscreteContacts {
 /// over the step squared (see `spring_law`).
 const STICK_RESOLUTION: Real = 1e-3;
 
+/// What a pair apart (or touching without an overlap) does within a sub-step.
+// The law is carried by value: one per pair about to touch and sub-step, where a box would
+// allocate each time.
+#[allow(clippy::large_enum_variant)]
+pub(super) enum Approach {
+    /// It touches slowly: its law over the sub-step.
+    Resting(StepLaw),
+    /// It meets at the rest speed or faster: an impact.
+    Impact,
+    /// It stays apart.
+    Apart,
+}
+
 /// The gap, in the smaller body's half-size, within which a pair apart counts as touching
 /// (and the least depth its overlap is probed at).
 const TOUCHING: Real = 1e-3;
@@ -170,7 +187,23 @@ impl DiscreteContacts {
         b: &Side<'_>,
         h: Real,
         rest_speed: Real,
-    ) -> Option<StepLaw> {
+    ) -> Approach {
+        match self.probe_law(params, a, b, h, rest_speed) {
+            Some(Ok(law)) => Approach::Resting(law),
+            Some(Err(())) => Approach::Impact,
+            None => Approach::Apart,
+        }
+    }
+
+    /// [`approaching_law`](Self::approaching_law): `None` apart, `Some(Err(()))` an impact.
+    fn probe_law(
+        &self,
+        params: &PairParameters,
+        a: &Side<'_>,
+        b: &Side<'_>,
+        h: Real,
+        rest_speed: Real,
+    ) -> Option<std::result::Result<StepLaw, ()>> {
         let reach = a.travel(h) + b.travel(h);
         let c = film_contact((a.handled, &a.pose, a.shape), (b.handled, &b.pose, b.shape), reach)?;
         let gap = c.dist.max(0.0);
@@ -181,9 +214,39 @@ impl DiscreteContacts {
             let now = -(a.kinematics.velocity_at(x) - b.kinematics.velocity_at(x)).dot(n);
             (now, now - h * (a.acceleration - b.acceleration).dot(n))
         };
-        // Probed along parry's normal; where that finds no overlap (parry's normal of two
-        // faces touching edge to edge is any of the faces'), along the line between the
-        // bodies' centres (a half-space's own normal).
+        // The directions to probe along: parry's normal; where that finds no overlap (parry's
+        // normal of two faces touching edge to edge is any of the faces'), the line between
+        // the bodies' centres (a half-space's own normal).
+        let directions =
+            [(-c.normal1).try_normalize(), a.towards(b).and_then(|t| t.try_normalize())];
+        // The pair takes part where it closes its gap within the sub-step — or touches now: a
+        // pair touching may be pressed together by the bodies it rests on or that rest on it,
+        // which its own motion does not show. Meeting at the rest speed or faster, it is an
+        // impact.
+        let n = directions.into_iter().flatten().next()?;
+        let (approach, end_speed) = closing(n);
+        let touching = gap <= TOUCHING * smaller;
+        if !(h * end_speed > gap || touching) {
+            // Not closing along the normal within the sub-step; yet a turning body's corner
+            // may reach the other within its travel: fast enough to be an impact, its own
+            // sub-steps find out.
+            let rim = |s: &Side<'_>| {
+                let r = s.handled.radius + s.handled.centre.length();
+                if r.is_finite() {
+                    s.kinematics.angvel.length() * r
+                } else {
+                    0.0
+                }
+            };
+            let bound = (a.kinematics.linvel - b.kinematics.linvel).length()
+                + rim(a)
+                + rim(b)
+                + h * (a.acceleration - b.acceleration).length();
+            return (bound >= rest_speed).then_some(Err(()));
+        }
+        if end_speed.max(approach) >= rest_speed {
+            return Some(Err(()));
+        }
         let probe_along = |n: Vector| {
             let (_, end) = closing(n);
             let probe = (h * end - gap).clamp(TOUCHING * smaller, 0.05 * smaller);
@@ -202,11 +265,7 @@ impl DiscreteContacts {
             .filter(|g| g.indentation > 0.0 && g.volume > 0.0)
             .map(|g| (g, shift))
         };
-        let (g, shift) =
-            [(-c.normal1).try_normalize(), a.towards(b).and_then(|t| t.try_normalize())]
-                .into_iter()
-                .flatten()
-                .find_map(probe_along)?;
+        let (g, shift) = directions.into_iter().flatten().find_map(probe_along)?;
         // Its point placed as a live contact's is: through a ball's centre, in the plane of a
         // body of revolution's axis.
         let moved = Pose::from_parts(a.pose.translation + shift, a.pose.rotation);
@@ -215,14 +274,6 @@ impl DiscreteContacts {
             &BodyState { shape: &a.handled.shape, pose: moved, kinematics: a.kinematics },
             &BodyState { shape: &b.handled.shape, pose: b.pose, kinematics: b.kinematics },
         );
-        // The pair takes part where it closes its gap within the sub-step slower than the
-        // rest speed — or touches now: a pair touching may be pressed together by the bodies
-        // it rests on or that rest on it, which its own motion does not show.
-        let (approach, end_speed) = closing(g.normal);
-        let touching = gap <= TOUCHING * smaller;
-        if !(h * end_speed > gap || touching) || end_speed.max(approach) >= rest_speed {
-            return None;
-        }
         let f_el = elastic_force(params, &g);
         if !(f_el > 0.0) {
             return None;
@@ -243,7 +294,7 @@ impl DiscreteContacts {
             let turn = Matrix::from_quat(b.pose.rotation);
             (turn * frame.rocking * turn.transpose(), rocking_damping_rate(damping, f_el, &g))
         };
-        Some(StepLaw {
+        Some(Ok(StepLaw {
             bodies: [None, None],
             given: [
                 (a.kinematics.linvel, a.kinematics.angvel),
@@ -261,39 +312,71 @@ impl DiscreteContacts {
             spring: self.spring_law(params, k_n, damping, f_el, 0.0, (Vector::ZERO, false), h),
             rocking,
             rocking_damping,
-        })
+        }))
     }
 
-    /// Solves the islands the `resting` contacts join over a sub-step of `h`, with each
-    /// dynamic body's force and torque so far this sub-step in `added` (explicit contacts,
-    /// the film) besides gravity and the user's: each contact's response, in order.
+    /// Solves the islands the `resting` contacts join over a sub-step of `h`, each body as
+    /// `bodies` gives it (`None`: one that moves as it does): each contact's response, in
+    /// order.
     ///
-    /// Islands are the connected parts of the graph of dynamic bodies the contacts join; a
-    /// fixed or kinematic body moves as it does and joins no island. They are solved in
-    /// parallel (feature `parallel`), each on its own, so the result does not depend on the
-    /// thread count.
+    /// Islands are the connected parts of the graph of dynamic bodies the contacts and the
+    /// rapier impulse joints between them join; a fixed or kinematic body moves as it does and
+    /// joins no island (nor does a body of a multibody, which moves at its velocity at the
+    /// start and takes its contacts' impulses as forces). A joint is held in the solve as a
+    /// stiff spring on the axes it locks ([`JOINT_RESOLUTION`]): the bodies it carries press on
+    /// their contacts as the joint lets them — a see-saw's plank under a pile, which, left to
+    /// rapier's joint solver after the contacts were solved, would take the pile's impulses
+    /// one step late and, lighter than the pile, amplify them. Rapier's joint solver then keeps
+    /// the joint (its motors and limits too) as always. The islands are solved in parallel
+    /// (feature `parallel`), each on its own, so the result does not depend on the thread
+    /// count.
     pub(super) fn solve_islands(
         &self,
         world: &PhysicsWorld,
         resting: &mut [Resting],
-        added: &HashMap<RigidBodyHandle, (Vector, Vector)>,
+        bodies: &(dyn Fn(RigidBodyHandle) -> Option<IslandBody> + Sync),
         h: Real,
     ) -> Result<(Responses, usize)> {
-        // Island bodies: every dynamic body a contact touches, in first-seen order.
+        // Island bodies: every dynamic body a contact touches, then the bodies their joints
+        // carry, in first-seen order.
         let mut index: HashMap<RigidBodyHandle, usize> = HashMap::default();
         let mut handles: Vec<RigidBodyHandle> = Vec::new();
-        let dynamic = |h: Option<RigidBodyHandle>| {
-            h.filter(|h| world.bodies.get(*h).is_some_and(|rb| rb.is_dynamic()))
-        };
+        fn slot(
+            (index, handles): (&mut HashMap<RigidBodyHandle, usize>, &mut Vec<RigidBodyHandle>),
+            b: RigidBodyHandle,
+        ) -> usize {
+            *index.entry(b).or_insert_with(|| {
+                handles.push(b);
+                handles.len() - 1
+            })
+        }
+        let states: std::cell::RefCell<HashMap<RigidBodyHandle, Option<IslandBody>>> =
+            Default::default();
+        let state = |b: RigidBodyHandle| *states.borrow_mut().entry(b).or_insert_with(|| bodies(b));
+        let island_body = |b: Option<RigidBodyHandle>| b.filter(|&b| state(b).is_some());
         for r in resting.iter_mut() {
             for (end, body) in [r.bodies.0, r.bodies.1].into_iter().enumerate() {
-                r.law.bodies[end] = dynamic(body).map(|h| {
-                    *index.entry(h).or_insert_with(|| {
-                        handles.push(h);
-                        handles.len() - 1
-                    })
-                });
+                r.law.bodies[end] = island_body(body).map(|b| slot((&mut index, &mut handles), b));
             }
+        }
+        let mut joints: Vec<(JointLaw, usize)> = Vec::new();
+        let mut seen = std::collections::HashSet::new();
+        let mut k = 0;
+        while k < handles.len() {
+            let b = handles[k];
+            let mut attached: Vec<_> = world.impulse_joints.attached_enabled_joints(b).collect();
+            attached.sort_by_key(|(_, _, j, _)| j.into_raw_parts());
+            for (b1, b2, handle, joint) in attached {
+                if !seen.insert(handle) {
+                    continue;
+                }
+                let ends = [island_body(Some(b1)), island_body(Some(b2))]
+                    .map(|e| e.map(|e| slot((&mut index, &mut handles), e)));
+                if let Some(law) = self.joint_law(world, (b1, b2), &joint.data, ends, h) {
+                    joints.push((law, k));
+                }
+            }
+            k += 1;
         }
         // Connected parts (union–find with path halving), each part's bodies and laws in order.
         let mut parent: Vec<usize> = (0..handles.len()).collect();
@@ -304,8 +387,10 @@ impl DiscreteContacts {
             }
             i
         }
-        for r in resting.iter() {
-            if let [Some(a), Some(b)] = r.law.bodies {
+        let edges =
+            resting.iter().map(|r| r.law.bodies).chain(joints.iter().map(|(j, _)| j.bodies));
+        for ends in edges {
+            if let [Some(a), Some(b)] = ends {
                 let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
                 if ra != rb {
                     parent[ra.max(rb)] = ra.min(rb);
@@ -313,12 +398,13 @@ impl DiscreteContacts {
             }
         }
         let mut island_of = vec![usize::MAX; handles.len()];
-        let mut islands: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
+        // Each island: its bodies, its contacts (indices into `resting`), its joints.
+        let mut islands: Vec<(Vec<usize>, Vec<usize>, Vec<usize>)> = Vec::new();
         for b in 0..handles.len() {
             let r = root(&mut parent, b);
             if island_of[r] == usize::MAX {
                 island_of[r] = islands.len();
-                islands.push((Vec::new(), Vec::new()));
+                islands.push((Vec::new(), Vec::new(), Vec::new()));
             }
             island_of[b] = island_of[r];
             islands[island_of[b]].0.push(b);
@@ -328,50 +414,50 @@ impl DiscreteContacts {
                 islands[island_of[b]].1.push(k);
             }
         }
-        let gravity = vector(world.gravity);
-        let body_of = |handle: RigidBodyHandle| -> IslandBody {
-            let rb = &world.bodies[handle];
-            let props = rb.mass_properties();
-            let j = &props.effective_world_inv_inertia;
-            let inverse_inertia = Matrix::from_cols(
-                Vector::new(real(j.m11), real(j.m12), real(j.m13)),
-                Vector::new(real(j.m12), real(j.m22), real(j.m23)),
-                Vector::new(real(j.m13), real(j.m23), real(j.m33)),
-            );
-            let inverse_mass = vector(props.effective_inv_mass);
-            let (f, t) = added.get(&handle).copied().unwrap_or((Vector::ZERO, Vector::ZERO));
-            let free_axes =
-                Vector::select(inverse_mass.cmpgt(Vector::ZERO), Vector::ONE, Vector::ZERO);
-            let start = (vector(rb.linvel()), vector(rb.angvel()));
-            let accel = gravity * real(rb.gravity_scale()) * free_axes
-                + (vector(rb.user_force()) + f) * inverse_mass;
-            let turn = inverse_inertia * (vector(rb.user_torque()) + t);
-            IslandBody {
-                inverse_mass,
-                inverse_inertia,
-                start,
-                free: (start.0 + accel * h, start.1 + turn * h),
+        for (k, (j, _)) in joints.iter().enumerate() {
+            if let Some(b) = j.bodies[0].or(j.bodies[1]) {
+                islands[island_of[b]].2.push(k);
             }
-        };
-        let solve_one = |(members, laws): &(Vec<usize>, Vec<usize>)| {
-            let local: HashMap<usize, usize> =
-                members.iter().enumerate().map(|(i, &b)| (b, i)).collect();
-            let bodies: Vec<IslandBody> = members.iter().map(|&b| body_of(handles[b])).collect();
-            let mut island_laws: Vec<StepLaw> = laws
-                .iter()
-                .map(|&k| {
-                    let mut law = resting[k].law;
-                    law.bodies = law.bodies.map(|b| b.map(|b| local[&b]));
-                    law
-                })
-                .collect();
-            implicit::solve(&bodies, &mut island_laws, h, &mut None)
-                .map(|s| {
-                    let relative = island_laws.iter().map(|l| l.relative(&s.velocities));
-                    s.responses.into_iter().zip(relative).collect::<Vec<_>>()
-                })
-                .map_err(|failure| (failure, laws[0]))
-        };
+        }
+        // Islands without a contact move as rapier moves them.
+        islands.retain(|(_, contacts, _)| !contacts.is_empty());
+        let states = states.into_inner();
+        let body_of = |b: RigidBodyHandle| states[&b].expect("an island body");
+        let solve_one =
+            |(members, contacts, island_joints): &(Vec<usize>, Vec<usize>, Vec<usize>)| {
+                let local: HashMap<usize, usize> =
+                    members.iter().enumerate().map(|(i, &b)| (b, i)).collect();
+                let bodies: Vec<IslandBody> =
+                    members.iter().map(|&b| body_of(handles[b])).collect();
+                let to_local = |ends: [Option<usize>; 2]| ends.map(|b| b.map(|b| local[&b]));
+                let mut laws: Vec<Law> = contacts
+                    .iter()
+                    .map(|&k| {
+                        let mut law = resting[k].law;
+                        law.bodies = to_local(law.bodies);
+                        Law::Contact(law)
+                    })
+                    .chain(island_joints.iter().map(|&k| {
+                        let mut law = joints[k].0;
+                        law.bodies = to_local(law.bodies);
+                        Law::Joint(law)
+                    }))
+                    .collect();
+                implicit::solve(&bodies, &mut laws, h, &mut None)
+                    .map(|s| {
+                        laws.iter()
+                            .zip(s.responses)
+                            .take(contacts.len())
+                            .map(|(l, r)| {
+                                let Law::Contact(c) = l else { unreachable!("contacts first") };
+                                let end =
+                                    |e: usize| c.bodies[e].map_or(c.given[e], |b| s.velocities[b]);
+                                (r, (l.relative(&s.velocities), [end(0), end(1)]))
+                            })
+                            .collect::<Vec<_>>()
+                    })
+                    .map_err(|failure| (failure, contacts[0]))
+            };
         #[cfg(feature = "parallel")]
         let solved: Vec<_> = {
             use rayon::prelude::*;
@@ -380,10 +466,10 @@ impl DiscreteContacts {
         #[cfg(not(feature = "parallel"))]
         let solved: Vec<_> = islands.iter().map(solve_one).collect();
         let mut responses = vec![None; resting.len()];
-        for ((_, laws), result) in islands.iter().zip(solved) {
+        for ((_, contacts, _), result) in islands.iter().zip(solved) {
             match result {
                 Ok(r) => {
-                    for (&k, r) in laws.iter().zip(r) {
+                    for (&k, r) in contacts.iter().zip(r) {
                         responses[k] = Some(r);
                     }
                 }
@@ -406,9 +492,123 @@ impl DiscreteContacts {
                 }
             }
         }
-        let responses = responses.into_iter().map(|r| r.expect("every law is in an island"));
+        // A contact whose bodies both move as they do (a body of a multibody on a fixed one):
+        // its law at their velocities.
+        let responses = responses.into_iter().zip(resting.iter()).map(|(r, rest)| {
+            r.unwrap_or_else(|| {
+                let relative = rest.law.relative(&[]);
+                (rest.law.response(relative, h), (relative, rest.law.given))
+            })
+        });
         Ok((responses.collect(), islands.len()))
     }
+
+    /// A rapier impulse joint between bodies `b1` and `b2` (island indices `ends`, `None`
+    /// where the body is not in an island) as a stiff spring on its locked axes over a
+    /// sub-step of `h` (see [`solve_islands`](Self::solve_islands)); `None` where it locks
+    /// nothing.
+    fn joint_law(
+        &self,
+        world: &PhysicsWorld,
+        (b1, b2): (RigidBodyHandle, RigidBodyHandle),
+        data: &engine::prelude::GenericJoint,
+        ends: [Option<usize>; 2],
+        h: Real,
+    ) -> Option<JointLaw> {
+        use engine::prelude::JointAxesMask;
+        let (r1, r2) = (&world.bodies[b1], &world.bodies[b2]);
+        let (p1, p2) = (pose(r1.position()), pose(r2.position()));
+        let (f1, f2) = (p1 * pose(&data.local_frame1), p2 * pose(&data.local_frame2));
+        let axes = [Vector::X, Vector::Y, Vector::Z].map(|a| f1.rotation * a);
+        let locked = data.locked_axes;
+        let pick = |flags: [JointAxesMask; 3]| {
+            let mut out = [Vector::ZERO; 3];
+            for k in 0..3 {
+                if locked.contains(flags[k]) {
+                    out[k] = axes[k];
+                }
+            }
+            out
+        };
+        let linear = pick([JointAxesMask::LIN_X, JointAxesMask::LIN_Y, JointAxesMask::LIN_Z]);
+        let angular = pick([JointAxesMask::ANG_X, JointAxesMask::ANG_Y, JointAxesMask::ANG_Z]);
+        if linear == [Vector::ZERO; 3] && angular == [Vector::ZERO; 3] {
+            return None;
+        }
+        // The spring: stiff against the lighter moving end over the sub-step.
+        let (mut mass, mut inertia): (Real, Real) = (Real::INFINITY, Real::INFINITY);
+        for (rb, end) in [(r1, ends[0]), (r2, ends[1])] {
+            if end.is_some() {
+                mass = mass.min(real(rb.mass()));
+                let i = vector(rb.mass_properties().local_mprops.principal_inertia());
+                inertia = inertia.min(i.min_element());
+            }
+        }
+        if !(mass.is_finite() && mass > 0.0) {
+            return None;
+        }
+        let inertia = if inertia.is_finite() && inertia > 0.0 { inertia } else { 0.0 };
+        let scale = 1.0 / (JOINT_RESOLUTION * h * h);
+        let (c1, c2) = (vector(r1.center_of_mass()), vector(r2.center_of_mass()));
+        let velocity = |rb: &engine::prelude::RigidBody| (vector(rb.linvel()), vector(rb.angvel()));
+        Some(JointLaw {
+            bodies: ends,
+            given: [velocity(r1), velocity(r2)],
+            levers: [f1.translation - c1, f2.translation - c2],
+            linear,
+            angular,
+            offset: f1.translation - f2.translation,
+            turn: (f1.rotation * f2.rotation.inverse()).to_scaled_axis(),
+            stiffness: (mass * scale, inertia * scale),
+        })
+    }
+}
+
+/// `σ` of a joint in the implicit solve: its spring is `1/σ` times as stiff as the lighter
+/// end's mass (and smallest inertia) over the step squared, so that a load the step can
+/// carry opens it by `σ` of what the load would move the body in a step unheld.
+pub(super) const JOINT_RESOLUTION: Real = 1e-3;
+
+/// A rapier world inverse inertia as a matrix.
+fn world_inverse_inertia(j: &engine::prelude::AngularInertia) -> Matrix {
+    Matrix::from_cols(
+        Vector::new(real(j.m11), real(j.m12), real(j.m13)),
+        Vector::new(real(j.m12), real(j.m22), real(j.m23)),
+        Vector::new(real(j.m13), real(j.m23), real(j.m33)),
+    )
+}
+
+/// Body `b` as an island's body over a sub-step of `h`, with the force and torque so far this
+/// sub-step in `added` (explicit contacts, the film) besides gravity and the user's.
+pub(super) fn island_body(
+    world: &PhysicsWorld,
+    b: RigidBodyHandle,
+    added: &HashMap<RigidBodyHandle, (Vector, Vector)>,
+    h: Real,
+) -> IslandBody {
+    let rb = &world.bodies[b];
+    let props = rb.mass_properties();
+    let inverse_inertia = world_inverse_inertia(&props.effective_world_inv_inertia);
+    let inverse_mass = vector(props.effective_inv_mass);
+    let (f, t) = added.get(&b).copied().unwrap_or((Vector::ZERO, Vector::ZERO));
+    let free_axes = Vector::select(inverse_mass.cmpgt(Vector::ZERO), Vector::ONE, Vector::ZERO);
+    let start = (vector(rb.linvel()), vector(rb.angvel()));
+    let accel = vector(world.gravity) * real(rb.gravity_scale()) * free_axes
+        + (vector(rb.user_force()) + f) * inverse_mass;
+    let turn = inverse_inertia * (vector(rb.user_torque()) + t);
+    IslandBody {
+        inverse_mass,
+        inverse_inertia,
+        start,
+        free: (start.0 + accel * h, start.1 + turn * h),
+    }
+}
+
+/// Whether body `b` moves in the islands' solve and an impact's sub-steps: dynamic, and not a
+/// link of a multibody (which rapier's multibody solver alone moves).
+pub(super) fn moves_in_islands(world: &PhysicsWorld, b: RigidBodyHandle) -> bool {
+    world.bodies.get(b).is_some_and(|rb| rb.is_dynamic())
+        && world.multibody_joints.rigid_body_link(b).is_none()
 }
 
 impl Side<'_> {
@@ -443,25 +643,36 @@ impl Side<'_> {
     }
 }
 
-/// The change a response makes to a contact's tangential spring: the stretch to carry into
-/// the next evaluation and whether it slides. Sticking, the stretch grows with the anchors'
-/// motion, which the next evaluation adds to the carried one: it stays; sliding, it is what
-/// the disc's force needs at the end of the sub-step, less that motion.
+/// The change a response makes to a contact's tangential spring: the stretch to record for
+/// the next evaluation, and whether it slides. At the end of the sub-step the spring is
+/// stretched by what the law took — sticking, the stretch it carried plus the relative motion
+/// at the contact over the sub-step; sliding, what the disc's force needs. The next evaluation
+/// adds to the recorded stretch how far its two anchors (the contact point as a material
+/// point of each body) have moved apart, which for a turning body is not quite the relative
+/// motion the law took (a rolling ball's anchor lifts off along a cycloid): the recorded
+/// stretch is the end stretch less the anchors' own motion over the sub-step, each body
+/// moving with its end velocities `ends` as rapier moves it.
 pub(super) fn spring_after(
     law: &StepLaw,
     r: &Response,
     h: Real,
-    relative: Motion,
+    (relative, ends): (Motion, [Motion; 2]),
 ) -> Option<(Vector, bool)> {
     let spring = law.spring?;
     if spring.stiffness <= 0.0 {
         return None;
     }
     let n = law.normal;
-    let u_t = relative.0 - n * n.dot(relative.0);
-    if !r.sliding {
-        return Some((spring.carried, false));
-    }
-    let end = -(r.tangential / h + u_t * spring.viscosity) / spring.stiffness;
-    Some((end - u_t * h, true))
+    let across = |v: Vector| v - n * n.dot(v);
+    let u_t = across(relative.0);
+    let end = if r.sliding {
+        -(r.tangential / h + u_t * spring.viscosity) / spring.stiffness
+    } else {
+        spring.carried + u_t * h
+    };
+    let travel = |e: usize| {
+        let ((v, w), lever) = (ends[e], law.levers[e]);
+        v * h + (crate::math::Rotation::from_scaled_axis(w * h) * lever - lever)
+    };
+    Some((end - across(travel(0) - travel(1)), r.sliding))
 }

@@ -5,10 +5,12 @@
 mod candidates;
 mod forces;
 mod hooks;
+mod impacts;
 mod islands;
 mod neighbours;
 mod network;
 mod substeps;
+mod verify;
 
 use hooks::Hooks;
 
@@ -41,6 +43,7 @@ pub use crate::substep::{
 use crate::tangential::{stiffness_ratio, TangentialLaw};
 use neighbours::NeighbourList;
 use parry3d_f64::shape::SharedShape;
+pub use verify::{FailedStep, ENERGY_TOLERANCE, REST_FRACTION};
 
 /// The drop-in's maps, keyed by handles: a fixed-seed fast hash (see `Cargo.toml`).
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
@@ -90,7 +93,7 @@ struct ColliderMotion {
 /// first (zero without periodic axes).
 type Candidate = (ColliderHandle, ColliderHandle, Vector);
 
-/// A live contact's forces on a sub-step, before they are summed (its state stays in its
+/// A checked pair's forces on a sub-step, before they are summed (its state stays in its
 /// slot, see `forces`).
 struct Evaluated {
     bodies: (Option<RigidBodyHandle>, Option<RigidBodyHandle>),
@@ -98,13 +101,44 @@ struct Evaluated {
     torques: (Vector, Vector),
     refresh: Option<crate::contact::Refresh>,
     indentation: Real,
-    /// The contact's law over the sub-step where it is taken implicitly (a resting or slowly
-    /// moving contact, or a pair about to touch slowly); its forces above are then not applied.
-    resting: Option<crate::implicit::StepLaw>,
+    /// How its force is taken.
+    treatment: Treatment,
     /// For a contact that began on this sub-step as an impact: how long it counts as one (s).
     impact: Option<Real>,
     /// The approach speed at the contact point (m/s; negative while separating).
     approach: Real,
+    /// The contact's elastic energy `∫ F_el dd` at its evaluation (J).
+    elastic: Real,
+}
+
+/// How a checked pair's force is taken over a sub-step.
+// The law is carried by value: one per candidate and sub-step in a list kept between them,
+// where a box would allocate each time.
+#[allow(clippy::large_enum_variant)]
+enum Treatment {
+    /// As evaluated, at the sub-step's start (explicit integration; an impact's sub-steps).
+    Explicit,
+    /// Implicitly, with this law over the sub-step: a resting or slowly moving contact, or a
+    /// pair about to touch slowly.
+    Resting(crate::implicit::StepLaw),
+    /// An impact, or a pair about to meet as one: resolved in sub-steps of its own.
+    Impact,
+}
+
+/// How a (sub-)step's pairs are checked.
+#[derive(Clone, Copy, Debug)]
+struct Pass {
+    /// The (sub-)step (s).
+    h: Real,
+    /// The speed below which two bodies meet without an impact (m/s).
+    rest_speed: Real,
+    /// Resting contacts and pairs about to touch taken implicitly, impacts set aside
+    /// ([`Integration::Implicit`], outside an impact's own sub-steps).
+    resting: bool,
+    /// The impacts' record kept ([`Integration::Implicit`]).
+    impacts: bool,
+    /// Inside an impact's own sub-steps: its impacts evaluated and applied as they are.
+    sub_cycle: bool,
 }
 
 /// A candidate pair last found apart: the exact distance's margin over the contact
@@ -196,6 +230,8 @@ pub struct DiscreteContacts {
     policy: StepPolicy,
     #[cfg_attr(feature = "checkpoint", serde(default))]
     integration: Integration,
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    failed_step: FailedStep,
     substeps_per_contact: Real,
     handled: HashMap<ColliderHandle, Handled>,
     /// Each handled collider's shape as f64 parry sees it, for the pairs' exact distances:
@@ -222,6 +258,14 @@ pub struct DiscreteContacts {
     /// [`Integration::Implicit`]), with how long each still counts as one (s).
     #[cfg_attr(feature = "checkpoint", serde(default))]
     impacts: HashMap<(ColliderHandle, ColliderHandle), Real>,
+    /// Each live contact's elastic energy at its last evaluation (J): what the step's check
+    /// allows its contacts to release.
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    elastic: HashMap<(ColliderHandle, ColliderHandle), Real>,
+    /// The step's deepest overlap against its limit: (depth over limit, the pair, depth,
+    /// limit).
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    deepest: Option<(Real, (ColliderHandle, ColliderHandle), Real, Real)>,
     /// Steps taken: where an error says when it happened.
     #[cfg_attr(feature = "checkpoint", serde(default))]
     steps: u64,
@@ -284,6 +328,7 @@ impl DiscreteContacts {
             geometry_reuse: crate::contact::GEOMETRY_REUSE,
             policy: StepPolicy::AutoSubstep { max_substeps: 10_000 },
             integration: Integration::Implicit,
+            failed_step: FailedStep::Redo,
             substeps_per_contact: SUBSTEPS_PER_CONTACT,
             handled: HashMap::default(),
             queries: HashMap::default(),
@@ -293,6 +338,8 @@ impl DiscreteContacts {
             indentation_limit: 0.5,
             lubrication: None,
             impacts: HashMap::default(),
+            elastic: HashMap::default(),
+            deepest: None,
             steps: 0,
             generation: 0,
             neighbours: Default::default(),
@@ -388,6 +435,23 @@ impl DiscreteContacts {
     /// How the contacts are integrated.
     pub fn integration(&self) -> Integration {
         self.integration
+    }
+
+    /// Whether the step takes its resting contacts implicitly: [`Integration::Implicit`] for
+    /// dry contacts. Contacts with an enlargement or a liquid film (wet runs, see `coupling`)
+    /// are integrated explicitly: the film's force acts across a gap and with the fluid's
+    /// step, which the implicit laws, taken where bodies touch, do not follow.
+    fn implicit(&self) -> bool {
+        self.integration == Integration::Implicit
+            && self.lubrication.is_none()
+            && self.settings.enlargement() == [0.0, 0.0]
+    }
+
+    /// With another answer to a step that fails its check (see [`FailedStep`]; the default is
+    /// [`FailedStep::Redo`]).
+    pub fn with_failed_step(mut self, failed: FailedStep) -> Self {
+        self.failed_step = failed;
+        self
     }
 
     /// With `n` sub-steps per Hertz contact time instead of [`SUBSTEPS_PER_CONTACT`] (at least
@@ -513,6 +577,12 @@ impl DiscreteContacts {
     /// handled (every such collider admits all the handled ones do, as with the default
     /// types): rapier's broad phase then pairs no two handled colliders. Hooks and event
     /// handlers called during the step see them so; the step gives them back before it returns.
+    ///
+    /// The step checks itself afterwards (see [`FailedStep`]): a contact deeper than its
+    /// bodies can hold, a body at a non-finite place, or energy the step created beyond the
+    /// contacts' stored energy and the users' forces' work undoes it; it is taken again in
+    /// four times the sub-steps, or refused with [`Error::StepRejected`] and the world left
+    /// as it was. Events of an undone attempt have reached `events` already.
     pub fn step_with_events(
         &mut self,
         world: &mut PhysicsWorld,
@@ -523,9 +593,57 @@ impl DiscreteContacts {
         check_positive("integration_parameters.dt", dt)?;
         self.restore_queries(world)?;
         self.compute_masses(world);
+        let rest_speed = self.rest_speed(world, dt);
+        let snapshot = self.snapshot(world);
+        let before = self.ledger(world, rest_speed);
+        let mut multiplier = 1;
+        loop {
+            self.deepest = None;
+            let (problem, refused) = match self.try_step(world, hooks, events, dt, multiplier) {
+                Ok(stats) => match self.verify(world, &before, dt) {
+                    None => {
+                        self.steps += 1;
+                        return Ok(stats);
+                    }
+                    Some(problem) => (problem, None),
+                },
+                Err(Error::StepRejected { pair, problem, .. }) => ((pair, problem), None),
+                Err(e) => ((String::new(), String::new()), Some(e)),
+            };
+            self.restore(world, &snapshot);
+            if let Some(e) = refused {
+                self.steps += 1;
+                return Err(e);
+            }
+            let more = multiplier * 4;
+            let allowed = match self.policy {
+                StepPolicy::Fixed { .. } => false,
+                StepPolicy::AutoSubstep { max_substeps } => {
+                    self.substeps_with(world, hooks, dt)? * more <= max_substeps.max(1)
+                }
+            };
+            if self.failed_step == FailedStep::Refuse || !allowed {
+                let step = self.steps;
+                self.steps += 1;
+                return Err(Error::StepRejected { step, pair: problem.0, problem: problem.1 });
+            }
+            multiplier = more;
+        }
+    }
+
+    /// One attempt at the step of `dt`, in `multiplier` times the sub-steps the advice asks
+    /// for.
+    fn try_step(
+        &mut self,
+        world: &mut PhysicsWorld,
+        hooks: &dyn PhysicsHooks,
+        events: &dyn EventHandler,
+        dt: Real,
+        multiplier: usize,
+    ) -> Result<StepStats> {
         let builds = self.neighbour_builds();
         let rest_speed = self.rest_speed(world, dt);
-        let substeps = self.substeps_with(world, hooks, dt)?;
+        let substeps = self.substeps_with(world, hooks, dt)? * multiplier;
         let saved =
             (world.integration_parameters.dt, world.integration_parameters.num_solver_iterations);
         let h = dt / substeps as Real;
@@ -537,8 +655,10 @@ impl DiscreteContacts {
         let mut stats = StepStats { substeps, ..Default::default() };
         self.set_aside_collision_types(world);
         let mut result = Ok(());
+        let implicit = self.implicit();
+        let pass = Pass { h, rest_speed, resting: implicit, impacts: implicit, sub_cycle: false };
         for k in 0..substeps {
-            if let Err(e) = self.apply_forces(world, hooks, &mut stats, k == 0, (h, rest_speed)) {
+            if let Err(e) = self.apply_forces(world, hooks, &mut stats, k == 0, pass) {
                 result = Err(e);
                 break;
             }
@@ -548,7 +668,6 @@ impl DiscreteContacts {
         world.integration_parameters.dt = saved.0;
         world.integration_parameters.num_solver_iterations = saved.1;
         self.restore_collision_types(world);
-        self.steps += 1;
         result?;
         self.wrap_bodies(world);
         stats.contacts = self.states.len();

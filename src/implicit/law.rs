@@ -163,6 +163,107 @@ impl StepLaw {
     }
 }
 
+/// A joint between two bodies of an island (or one and a body whose motion is given), held
+/// as a stiff spring on the axes it locks: the anchor points kept together along its locked
+/// translations, the frames kept aligned about its locked rotations. Linear in the relative
+/// motion, so its part of the step's problem is a quadratic.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct JointLaw {
+    /// The island's bodies at either end; `None`: a body the island does not move.
+    pub bodies: [Option<usize>; 2],
+    /// Either end's velocity where it is not an island body.
+    pub given: [Motion; 2],
+    /// From each body's centre of mass to its anchor point (m, world).
+    pub levers: [Vector; 2],
+    /// The locked translation axes and rotation axes (world unit vectors; zero where free).
+    pub linear: [Vector; 3],
+    pub angular: [Vector; 3],
+    /// A's anchor less B's (m), and A's frame's turn from B's (rad, small-angle vector).
+    pub offset: Vector,
+    pub turn: Vector,
+    /// Stiffness along the locked translations (N/m) and about the locked rotations (N m/rad).
+    pub stiffness: (Real, Real),
+}
+
+impl JointLaw {
+    /// The relative motion at the anchors, as [`StepLaw::relative`].
+    fn relative(&self, velocities: &[Motion]) -> Motion {
+        let at = |end: usize| {
+            let (v, w) = self.bodies[end].map_or(self.given[end], |b| velocities[b]);
+            (v + w.cross(self.levers[end]), w)
+        };
+        let ((ua, wa), (ub, wb)) = (at(0), at(1));
+        (ua - ub, wa - wb)
+    }
+
+    /// The impulse on A over a step of `h` for the relative motion `(u, turn)`, and its rates.
+    fn response(&self, (u, w): Motion, h: Real) -> Response {
+        let (k, k_turn) = self.stiffness;
+        let (mut force, mut couple) = (Vector::ZERO, Vector::ZERO);
+        let (mut force_rate, mut couple_rate) = (Matrix::ZERO, Matrix::ZERO);
+        for a in self.linear.iter().filter(|a| **a != Vector::ZERO) {
+            force -= *a * (k * h * (self.offset.dot(*a) + h * u.dot(*a)));
+            force_rate += Matrix::from_cols(*a * a.x, *a * a.y, *a * a.z) * (k * h * h);
+        }
+        for a in self.angular.iter().filter(|a| **a != Vector::ZERO) {
+            couple -= *a * (k_turn * h * (self.turn.dot(*a) + h * w.dot(*a)));
+            couple_rate += Matrix::from_cols(*a * a.x, *a * a.y, *a * a.z) * (k_turn * h * h);
+        }
+        Response { normal: 0.0, tangential: force, couple, sliding: false, force_rate, couple_rate }
+    }
+}
+
+/// A law of an island: a contact's or a joint's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Law {
+    Contact(StepLaw),
+    Joint(JointLaw),
+}
+
+impl Law {
+    /// The island's bodies at either end.
+    pub(crate) fn bodies(&self) -> [Option<usize>; 2] {
+        match self {
+            Law::Contact(l) => l.bodies,
+            Law::Joint(l) => l.bodies,
+        }
+    }
+
+    /// The levers from each body's centre of mass to where the law acts.
+    pub(crate) fn levers(&self) -> [Vector; 2] {
+        match self {
+            Law::Contact(l) => l.levers,
+            Law::Joint(l) => l.levers,
+        }
+    }
+
+    /// The relative motion where the law acts.
+    pub(crate) fn relative(&self, velocities: &[Motion]) -> Motion {
+        match self {
+            Law::Contact(l) => l.relative(velocities),
+            Law::Joint(l) => l.relative(velocities),
+        }
+    }
+
+    /// The law's response over step `h` to the relative motion.
+    pub(crate) fn response(&self, relative: Motion, h: Real) -> Response {
+        match self {
+            Law::Contact(l) => l.response(relative, h),
+            Law::Joint(l) => l.response(relative, h),
+        }
+    }
+
+    /// The impulses a response puts on the law's two ends (each about its centre of mass).
+    pub(crate) fn on_bodies(&self, r: &Response) -> [Motion; 2] {
+        let (n, levers) = match self {
+            Law::Contact(l) => (l.normal, l.levers),
+            Law::Joint(l) => (Vector::ZERO, l.levers),
+        };
+        let f = n * r.normal + r.tangential;
+        [(f, levers[0].cross(f) + r.couple), (-f, -levers[1].cross(f) - r.couple)]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -30,7 +30,7 @@ pub(crate) mod law;
 
 use crate::math::{Matrix, Real, Vector};
 use cholesky::{Block, BlockCholesky, Column, ZERO};
-pub(crate) use law::{Motion, NormalLaw, Response, SpringLaw, StepLaw};
+pub(crate) use law::{JointLaw, Law, Motion, NormalLaw, Response, SpringLaw, StepLaw};
 
 /// A body of an island.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -138,13 +138,13 @@ pub(crate) struct Solution {
 /// structure between calls of the same graph.
 pub(crate) fn solve(
     bodies: &[IslandBody],
-    laws: &mut [StepLaw],
+    laws: &mut [Law],
     h: Real,
     structure: &mut Option<(Vec<(usize, usize)>, BlockCholesky)>,
 ) -> Result<Solution, Failure> {
     let edges: Vec<(usize, usize)> = laws
         .iter()
-        .filter_map(|l| match l.bodies {
+        .filter_map(|l| match l.bodies() {
             [Some(a), Some(b)] if a != b => Some((a.min(b), a.max(b))),
             _ => None,
         })
@@ -162,6 +162,7 @@ pub(crate) fn solve(
         let mut moved = false;
         for law in laws.iter_mut() {
             let r = law.response(law.relative(&v), h);
+            let Law::Contact(law) = law else { continue };
             if let Some(spring) = law.spring.as_mut() {
                 let f_n = r.normal / h;
                 if (f_n - spring.normal_force).abs() > DISC_TOLERANCE * f_n.max(spring.normal_force)
@@ -184,7 +185,7 @@ pub(crate) fn solve(
 fn gradient(
     bodies: &[IslandBody],
     masses: &[(Block, [bool; 6])],
-    laws: &[StepLaw],
+    laws: &[Law],
     h: Real,
     v: &[Motion],
 ) -> (Vec<Column>, Real, Real) {
@@ -192,7 +193,7 @@ fn gradient(
     for law in laws {
         let r = law.response(law.relative(v), h);
         for (end, load) in law.on_bodies(&r).into_iter().enumerate() {
-            if let Some(b) = law.bodies[end] {
+            if let Some(b) = law.bodies()[end] {
                 impulses[b].0 += load.0;
                 impulses[b].1 += load.1;
             }
@@ -231,7 +232,7 @@ const ROUND_OFF: Real = 64.0 * Real::EPSILON;
 fn newton(
     bodies: &[IslandBody],
     masses: &[(Block, [bool; 6])],
-    laws: &[StepLaw],
+    laws: &[Law],
     h: Real,
     factor: &mut BlockCholesky,
     v: &mut [Motion],
@@ -257,15 +258,16 @@ fn newton(
         for law in laws {
             let w = law.relative(v);
             let resp = law.response(w, h);
+            let (ends, levers) = (law.bodies(), law.levers());
             let block = |e: usize, f: usize| {
                 let sign = if e == f { 1.0 } else { -1.0 };
-                coupling(&resp, law.levers[e], law.levers[f], sign)
+                coupling(&resp, levers[e], levers[f], sign)
             };
             for e in 0..2 {
-                let Some(a) = law.bodies[e] else { continue };
+                let Some(a) = ends[e] else { continue };
                 cholesky::add_to(&mut diagonal[a], &block(e, e));
                 if e == 0 {
-                    if let Some(b) = law.bodies[1] {
+                    if let Some(b) = ends[1] {
                         if a == b {
                             cholesky::add_to(&mut diagonal[a], &block(0, 1));
                             cholesky::add_to(&mut diagonal[a], &block(1, 0));
@@ -321,7 +323,7 @@ fn newton(
 fn line_search(
     bodies: &[IslandBody],
     masses: &[(Block, [bool; 6])],
-    laws: &[StepLaw],
+    laws: &[Law],
     h: Real,
     v: &[Motion],
     direction: &[Motion],
@@ -341,7 +343,7 @@ fn line_search(
         let (mut s, mut c) = (offset + alpha * curvature, curvature);
         for (law, ((u, w), (du, dw))) in laws.iter().zip(&relative) {
             let r = law.response((*u + *du * alpha, *w + *dw * alpha), h);
-            let f = law.normal * r.normal + r.tangential;
+            let f = law.on_bodies(&r)[0].0;
             s -= f.dot(*du) + r.couple.dot(*dw);
             c += du.dot(r.force_rate * *du) + dw.dot(r.couple_rate * *dw);
         }
@@ -373,14 +375,15 @@ fn line_search(
     alpha
 }
 
-impl StepLaw {
+impl Law {
     /// [`relative`](Self::relative) of a change of velocities `dv` (the given ends do not
     /// change).
     fn relative_of(&self, dv: &[Motion]) -> Motion {
+        let (ends, levers) = (self.bodies(), self.levers());
         let at = |end: usize| {
-            self.bodies[end].map_or((Vector::ZERO, Vector::ZERO), |b| {
+            ends[end].map_or((Vector::ZERO, Vector::ZERO), |b| {
                 let (v, w) = dv[b];
-                (v + w.cross(self.levers[end]), w)
+                (v + w.cross(levers[end]), w)
             })
         };
         let ((ua, wa), (ub, wb)) = (at(0), at(1));
