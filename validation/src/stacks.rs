@@ -124,8 +124,22 @@ fn block(
     body
 }
 
-/// Builds `scene`.
+/// Builds `scene` with rapier's `length_unit` at the bodies' size.
 pub fn build(scene: Scene) -> Built {
+    build_at(scene, None)
+}
+
+/// Builds `scene`, with rapier's `length_unit` set to `length_unit` (m) where given.
+pub fn build_at(scene: Scene, length_unit: Option<Real>) -> Built {
+    let mut built = built(scene);
+    if let Some(unit) = length_unit {
+        built.world.integration_parameters.length_unit = unit;
+    }
+    built
+}
+
+/// The scene as [`build`] builds it.
+fn built(scene: Scene) -> Built {
     match scene {
         Scene::Pyramid { base } => {
             let h = 0.05;
@@ -262,6 +276,9 @@ pub struct Run {
     pub substeps_per_step: Real,
     /// Steps taken.
     pub steps: usize,
+    /// The most the bodies' mechanical energy (kinetic and gravitational) rose above its value
+    /// at the start, over the steps (J): a stack released at rest can only lose energy.
+    pub energy_gain: Real,
     /// Wall time (s).
     pub wall: Real,
 }
@@ -349,8 +366,18 @@ pub fn run_rapier(scene: Scene, seconds: Real) -> Run {
         kinetic_energy: kinetic_energy(&built.world),
         substeps_per_step: 1.0,
         steps,
+        energy_gain: 0.0,
         wall,
     }
+}
+
+/// The bodies' kinetic energy plus their potential energy in gravity (J).
+pub fn mechanical_energy(world: &PhysicsWorld, bodies: &[RigidBodyHandle]) -> Real {
+    bodies
+        .iter()
+        .filter_map(|b| world.bodies.get(*b))
+        .map(|rb| rb.kinetic_energy() - rb.mass() * world.gravity.dot(rb.center_of_mass()))
+        .sum()
 }
 
 /// Runs `scene` for `seconds` with the discrete contact `contacts` at Young's modulus `youngs`
@@ -359,15 +386,28 @@ pub fn run_discrete(
     scene: Scene,
     seconds: Real,
     youngs: Real,
+    contacts: DiscreteContacts,
+    trace: bool,
+) -> Result<Run> {
+    run_built(scene, build(scene), seconds, youngs, contacts, trace)
+}
+
+/// [`run_discrete`] on a scene already built (rapier's `length_unit` chosen, say).
+pub fn run_built(
+    scene: Scene,
+    mut built: Built,
+    seconds: Real,
+    youngs: Real,
     mut contacts: DiscreteContacts,
     trace: bool,
 ) -> Result<Run> {
-    let mut built = build(scene);
     let start: Vec<Vector> =
         built.bodies.iter().map(|b| built.world.bodies[*b].translation()).collect();
     let steps = (seconds / built.world.integration_parameters.dt).round() as usize;
     contacts.handle_all(&mut built.world, Material::new(youngs, 0.3)?)?;
     let (mut max_ind, mut substeps): (Real, usize) = (0.0, 0);
+    let start_energy = mechanical_energy(&built.world, &built.bodies);
+    let mut energy_gain: Real = 0.0;
     let clock = Instant::now();
     let mut refused = None;
     let mut taken = 0;
@@ -389,6 +429,8 @@ pub fn run_discrete(
                 max_ind = max_ind.max(stats.max_indentation);
                 substeps += stats.substeps;
                 taken += 1;
+                energy_gain =
+                    energy_gain.max(mechanical_energy(&built.world, &built.bodies) - start_energy);
             }
             Err(e) => {
                 refused = Some(e);
@@ -407,6 +449,7 @@ pub fn run_discrete(
         kinetic_energy: kinetic_energy(&built.world),
         substeps_per_step: substeps as Real / taken.max(1) as Real,
         steps: taken,
+        energy_gain,
         wall,
     })
 }
