@@ -4,6 +4,7 @@
 //! `cargo run --release --example stacks`
 
 use clap::Parser;
+use discrete_contact::rapier::Integration;
 use discrete_contact_validation::stacks::{self, Outcome, Scene};
 
 /// The scene suite: pyramids of 10 and 55 boxes, a tower of planks, a wall of bricks, spheres
@@ -30,8 +31,12 @@ struct Options {
     #[arg(long)]
     trace: bool,
     /// Most sub-steps per step before a step is refused.
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = 10_000)]
     max_substeps: usize,
+    /// Every contact explicit, in sub-steps of its own stiffness (`Integration::Explicit`),
+    /// instead of the default implicit step of resting contacts.
+    #[arg(long)]
+    explicit: bool,
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -70,8 +75,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             rapier.outcome
         );
         for &e in &options.youngs {
+            let integration =
+                if options.explicit { Integration::Explicit } else { Integration::Implicit };
             let contacts = stacks::discrete_contacts(options.max_substeps)?
-                .with_geometry_reuse(options.reuse)?;
+                .with_geometry_reuse(options.reuse)?
+                .with_integration(integration);
             let run = stacks::run_discrete(scene, options.seconds, e, contacts, options.trace)?;
             let outcome = match &run.outcome {
                 Outcome::Stands => "stands".to_string(),

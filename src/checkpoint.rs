@@ -45,7 +45,7 @@ use crate::io::{io_error, write_atomically};
 
 /// The checkpoint format this build writes and reads; raised whenever a saved type changes
 /// (a file of another format is refused with `CheckpointProblem::FormatVersion`).
-pub const FORMAT_VERSION: u32 = 7;
+pub const FORMAT_VERSION: u32 = 8;
 
 /// Signature at the start of every checkpoint (a non-text byte first, as PNG does, so a text
 /// file is never mistaken for one).

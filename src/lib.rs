@@ -29,6 +29,10 @@
 //!
 //! ## Cargo features
 //! - `rapier` (default): the drop-in for rapier3d-f64 scenes ([`rapier`] module).
+//! - `rapier-f32`: the same drop-in for rapier3d (f32) scenes, rapier's default build and the
+//!   one `bevy_rapier3d` uses (`rapier_f32` module); the contact arithmetic stays in f64, poses,
+//!   velocities and forces are converted at rapier's boundary. With `default-features = false`
+//!   a dry f32 build compiles neither f64 rapier nor the lattice.
 //! - `parallel` (default): a step's contacts are evaluated on all cores (rayon); forces are
 //!   summed in a fixed order, so results do not depend on the thread count.
 //! - `fluid`: wet runs — the `coupling` module (rapier bodies four-way coupled with the
@@ -39,12 +43,23 @@
 //!
 //! Every file the crate writes goes through [`io`]: complete or not at all.
 //!
-//! **Why f64 only** (no rapier3d/f32 build): a contact sub-step moves a body by `v Δt_sub`,
-//! which for stiff slow impacts is nanometres — below f32's spacing of coordinates a metre from
-//! the origin (1.2e-7 m). With the body's state rounded to f32 each sub-step, a 200 GPa sphere
-//! at 1 cm/s never reaches the wall 1 m from the origin, and restitution errors at 1 m/s grow
-//! from 0.6 % to 1.8–2.6 % (the `stability_report` example's precision table); in f64
-//! the same impacts agree to 1e-3 wherever the scene is.
+//! ## Stiff contacts at rapier's step
+//! The drop-in takes every contact that is not an impact implicitly (`Integration::Implicit`,
+//! the default): bodies resting on each other, rolling or sliding are solved at whatever step
+//! rapier is given — one convex problem per island of touching bodies, the Nassauer–Kuna law
+//! taken where the step leaves each contact — so a stack of steel boxes stands at 60 Hz.
+//! Impacts keep the sub-steps their restitution needs, each group of bodies they set moving
+//! sub-stepped on its own. Every step checks itself afterwards (overlaps within their limit,
+//! no energy created) and is redone in more sub-steps or refused with
+//! [`Error::StepRejected`]; it never returns `Ok` for a world that blew up.
+//! `Integration::Explicit` integrates every contact in sub-steps of the stiffest one's period
+//! (every force history resolved in time, at a cost growing as `√E`).
+//!
+//! **f32 scenes**: in f32 a coordinate moves in steps of about `|x| · 1.2e-7` (0.12 µm at
+//! 1 m). A stiff slow impact resolved in sub-steps of microseconds may move a body by less
+//! than that per step; rather than let it stall, the f32 drop-in refuses such a step with
+//! [`Error::PrecisionTooLow`] — the scene nearer the origin, a softer material or the f64
+//! build serves it.
 //!
 //! ## Errors
 //! Every fallible call returns [`Error`]; its variants are the catalogue:
@@ -69,6 +84,15 @@
 //!   the limit (half the smaller body's smallest half-extent by default): the bodies would
 //!   pass through each other. Use a stiffer material or a lower speed; deliberately softened
 //!   materials raise the limit with `DiscreteContacts::with_indentation_limit`.
+//! - [`Error::PrecisionTooLow`] — (rapier drop-in) a moving pair whose approach in one
+//!   (sub-)step is under two spacings of its coordinates (f32 far from the origin): the body
+//!   would stall. The message names the pair, the distance from the origin and what would
+//!   work.
+//! - [`Error::StepRejected`] — (rapier drop-in) a step whose outcome failed its own check (a
+//!   contact deeper than its bodies can hold, energy created, an implicit solve without a
+//!   solution) and could not be redone in more sub-steps; the message names the pair, the
+//!   step and what went wrong, and the world is left as it was before the step. Lower `dt`,
+//!   use a softer material or slower bodies, or allow more sub-steps.
 //! - [`Error::InvalidParameter`] with `periodic box size` — a periodic box shorter than twice a
 //!   pair's reach (two bounding diameters plus the contact margin): a body would meet two
 //!   images of another. Enlarge the box.

@@ -85,6 +85,22 @@ fn automatic_substeps_resolve_a_stiff_impact_and_keep_user_forces() {
     assert!(rb.translation().y > 0.0099);
 }
 
+/// A fixed policy divides the step into exactly its sub-steps, impacts included: the ball's
+/// one contact is evaluated once per sub-step, not once per sub-step of each sub-step.
+#[test]
+fn a_fixed_policy_takes_its_sub_steps_and_no_more() {
+    let (mut world, mut contacts, ball) = ball_on_floor(1e-5, StepPolicy::Fixed { substeps: 8 });
+    let mut in_contact = 0;
+    for _ in 0..400 {
+        let s = contacts.step(&mut world).unwrap();
+        assert!(s.substeps + s.impact_substeps <= 2 * 8, "{} + {}", s.substeps, s.impact_substeps);
+        assert!(s.evaluations <= 8, "{} evaluations of one pair in 8 sub-steps", s.evaluations);
+        in_contact += usize::from(s.evaluations > 0);
+    }
+    assert!(in_contact > 1, "the ball never touched the floor");
+    assert!(world.bodies[ball].linvel().y > 1.5, "no rebound: {}", world.bodies[ball].linvel().y);
+}
+
 /// A step refused while a contact lives (a body's velocity made NaN between steps) loses no
 /// contact: the ball is still pressed into the floor when the next step, with the velocity
 /// mended, resumes, and its force keeps it out of the floor.

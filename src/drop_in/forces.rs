@@ -179,7 +179,7 @@ impl DiscreteContacts {
         stats: &mut StepStats,
         first: bool,
         pass: Pass,
-    ) -> Result<()> {
+    ) -> Result<bool> {
         let mut buffers = std::mem::take(&mut self.buffers);
         let result = self.forces_into(world, hooks, stats, first, pass, &mut buffers);
         self.buffers = buffers;
@@ -195,7 +195,7 @@ impl DiscreteContacts {
         first: bool,
         pass: Pass,
         buffers: &mut SubstepBuffers,
-    ) -> Result<()> {
+    ) -> Result<bool> {
         let SubstepBuffers { pairs, slots, checks, added, applied } = buffers;
         let h = pass.h;
         if pass.resting {
@@ -295,7 +295,22 @@ impl DiscreteContacts {
         let placed = if colliding.is_empty() {
             Vec::new()
         } else {
-            self.resolve_impacts(world, &colliding, &mut resting, &apart, pass, stats, added)?
+            match self.resolve_impacts(
+                world,
+                &colliding,
+                &mut resting,
+                &apart,
+                pass,
+                stats,
+                added,
+            )? {
+                Some(placed) => placed,
+                // An impact struck a body on a joint: nothing applied, the step goes explicit.
+                None => {
+                    applied.clear();
+                    return Ok(false);
+                }
+            }
         };
         if !resting.is_empty() {
             let bodies = |b: RigidBodyHandle| {
@@ -345,7 +360,7 @@ impl DiscreteContacts {
                 }
             }
         }
-        Ok(())
+        Ok(true)
     }
 
     /// Moves the candidates' contact states back to the map after their checks (on an error
@@ -497,8 +512,9 @@ impl DiscreteContacts {
         };
         let Some(out) = out else {
             *slot = None;
-            // Touching without an overlap yet (boxes stacked exactly touching).
-            if implicit && !live {
+            // Touching without an overlap (boxes stacked exactly touching, or a contact whose
+            // overlap has just gone): the bodies may still meet within the sub-step.
+            if implicit {
                 return approaching(film);
             }
             return Ok((None, GapCheck::Closed, film));
@@ -562,7 +578,7 @@ impl DiscreteContacts {
         rest_speed: Real,
         resolved: bool,
     ) {
-        if !self.implicit() {
+        if self.integration != Integration::Implicit {
             self.impacts.clear();
             return;
         }

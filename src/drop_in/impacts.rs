@@ -5,18 +5,22 @@
 //! An impact lasts a Hertz contact time (tens of microseconds for steel) and its restitution
 //! needs tens of sub-steps within it; dividing the whole world's step for it would cost every
 //! body and contact that many evaluations. Here a group is sub-stepped for each set of bodies
-//! the impacts join, together with every free body those touch or may reach within the step
-//! (a body struck while resting on others passes the blow on: held still, it would return the
-//! striker's whole momentum and gain its own as well). Within the group's sub-steps the
-//! impacts are evaluated and applied as they are (explicit), the group's other contacts are
-//! taken implicitly as over the world's step (see `islands`), and the bodies at the contacts'
-//! other ends move on as they were (a fixed body stays; a body of a multibody is held where
-//! rapier's multibody solver alone knows how it would move); impulse joints are held in the
-//! implicit solves as in the world's. Gravity, the user's force and the liquid film
-//! are held over the step. What comes out is each body's impulse from its contacts and where it
-//! ends the step; the impulse joins the world's island solve as a force over the step (the
-//! bodies held take theirs), and a group's body starts rapier's step where, moving with its
-//! velocity at the step's end, it ends where its own sub-steps took it.
+//! the impacts join, together with every free body those touch or may reach within the step (a
+//! body struck while resting on others passes the blow on: held still, it would return the
+//! striker's whole momentum and gain its own as well). Within the group's sub-steps every
+//! contact is evaluated and applied as it is (explicit), in sub-steps that resolve each
+//! impact's contact time and, bounded from above by Gershgorin's theorem, the fastest
+//! vibration of all the group's contacts together; the bodies at the contacts' other ends move
+//! on as they were (a fixed body stays, a body of a multibody is held). Gravity, the user's
+//! force and the liquid film are held over the step. What comes out is each body's impulse
+//! from its contacts and where it ends the step; the impulse joins the world's island solve as
+//! a force over the step (the bodies held take theirs), and a group's body starts rapier's step
+//! where, moving with its velocity at the step's end, it ends where its own sub-steps took it.
+//!
+//! A group that holds a body on an impulse joint is not stepped here: rapier's joint solver
+//! alone knows how such a body moves while it is struck. The world's step is then taken
+//! explicitly, each of its sub-steps a step of rapier's (as [`Integration::Explicit`] takes
+//! every step).
 
 use super::forces::separation;
 use super::*;
@@ -99,6 +103,9 @@ impl DiscreteContacts {
     /// those touch, or may reach among the candidates `apart`, and all these bodies' contacts,
     /// taken out of `resting`; adds each body's impulse to `added` as a force over the
     /// sub-step, and returns where each of the groups' bodies must start rapier's step.
+    /// `None`, with nothing done, where a group holds a body on an impulse joint: rapier's
+    /// joint solver alone knows how such a body moves while it is struck, and the step is then
+    /// taken explicitly, each of its sub-steps a step of rapier's.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn resolve_impacts(
         &mut self,
@@ -109,7 +116,7 @@ impl DiscreteContacts {
         pass: Pass,
         stats: &mut StepStats,
         added: &mut HashMap<RigidBodyHandle, (Vector, Vector)>,
-    ) -> Result<Vec<(RigidBodyHandle, Pose)>> {
+    ) -> Result<Option<Vec<(RigidBodyHandle, Pose)>>> {
         // The bodies the sub-steps move: dynamic ones, their impulse joints held in the
         // implicit solves as in the world's islands (a body of a multibody is held where it
         // is over them and takes its impulse with the step).
@@ -172,6 +179,11 @@ impl DiscreteContacts {
                 break;
             }
         }
+        let on_joint =
+            |b: &RigidBodyHandle| world.impulse_joints.attached_enabled_joints(*b).next().is_some();
+        if groups.iter().any(|(bodies, _)| bodies.iter().any(on_joint)) {
+            return Ok(None);
+        }
         let mut k = 0;
         resting.retain(|_| {
             k += 1;
@@ -203,7 +215,7 @@ impl DiscreteContacts {
                 placed.push((start.handle, start.pose()));
             }
         }
-        Ok(placed)
+        Ok(Some(placed))
     }
 
     /// Steps one group of `bodies` and its `pairs` over `pass.h` in sub-steps of its impacts'
@@ -315,12 +327,16 @@ impl DiscreteContacts {
                 }
             }
         };
-        // A fixed policy divides the step evenly, refusing where an impact asks for more;
-        // the automatic one follows the impacts from sub-step to sub-step.
+        // A fixed policy has divided the step evenly already: an impact takes each of its
+        // sub-steps whole, refused where it asks for more of the step. The automatic one
+        // follows the impacts from sub-step to sub-step.
         let fixed = match self.policy {
-            StepPolicy::Fixed { .. } => {
-                let limits = self.impact_limits(world, pairs, &moving, &motion, 0.0, h, false)?;
-                Some(self.divide(h, &limits)?)
+            StepPolicy::Fixed { substeps } => {
+                let mut limits =
+                    self.impact_limits(world, pairs, &moving, &motion, 0.0, h, false)?;
+                self.group_limit(world, pairs, &moving, &index, &mut limits);
+                self.divide(h * substeps.max(1) as Real, &limits)?;
+                Some(1)
             }
             StepPolicy::AutoSubstep { .. } => None,
         };
@@ -334,7 +350,7 @@ impl DiscreteContacts {
                 None => {
                     let limits =
                         self.impact_limits(world, pairs, &moving, &motion, t, left, true)?;
-                    left / self.divide(left, &limits)? as Real
+                    left / (self.divide(left, &limits)? * pass.refine) as Real
                 }
             };
             // The last sub-step ends the step exactly.
@@ -344,7 +360,7 @@ impl DiscreteContacts {
             slots.clear();
             slots.extend(pairs.iter().map(|&(ca, cb, _)| self.states.remove(&(ca, cb))));
             checks.clear();
-            let sub_pass = Pass { h: tau, sub_cycle: true, ..pass };
+            let sub_pass = Pass { h: tau, resting: false, sub_cycle: true, ..pass };
             for (&pair, slot) in pairs.iter().zip(slots.iter_mut()) {
                 let motions = (motion(&moving, pair.0, t), motion(&moving, pair.1, t));
                 checks.push(self.check_pair(world, pair, motions, slot, sub_pass));
@@ -358,10 +374,9 @@ impl DiscreteContacts {
             if let Some(k) = checks.iter().position(|e| e.is_err()) {
                 return Err(checks.swap_remove(k).err().expect("an error was found"));
             }
-            // The impacts' forces as evaluated; the other contacts' laws to the implicit solve.
+            // Every contact's force as evaluated at the sub-step's start.
             let mut loads = vec![(Vector::ZERO, Vector::ZERO); moving.len()];
-            let mut resting: Vec<islands::Resting> = Vec::new();
-            for (e, &(ca, cb, shift)) in checks.iter().zip(pairs) {
+            for (e, &(ca, cb, _)) in checks.iter().zip(pairs) {
                 let Ok((Some(c), _, _)) = e else { continue };
                 if let Some(why) = c.refresh {
                     stats.refreshes.count(why);
@@ -370,19 +385,6 @@ impl DiscreteContacts {
                 if self.states.contains_key(&(ca, cb)) {
                     self.elastic.insert((ca, cb), c.elastic);
                     self.note_depth((ca, cb), c.indentation);
-                }
-                match &c.treatment {
-                    Treatment::Resting(law) => {
-                        resting.push(islands::Resting {
-                            law: *law,
-                            bodies: c.bodies,
-                            pair: (ca, cb),
-                            shift,
-                        });
-                        continue;
-                    }
-                    Treatment::Impact => continue,
-                    Treatment::Explicit => {}
                 }
                 stats.evaluations += 1;
                 for (b, f, torque) in [
@@ -399,45 +401,10 @@ impl DiscreteContacts {
                     }
                 }
             }
-            // The group's velocities at the sub-step's end: the implicit solve of its resting
-            // contacts with the impacts' forces held, or those forces alone.
-            let mut ends: Vec<(Vector, Vector)> =
+            let ends: Vec<(Vector, Vector)> =
                 moving.iter().zip(&loads).map(|(m, load)| m.island_body(tau, *load).free).collect();
-            let mut impulses: Vec<(Vector, Vector)> =
+            let impulses: Vec<(Vector, Vector)> =
                 loads.iter().map(|(f, torque)| (*f * tau, *torque * tau)).collect();
-            if !resting.is_empty() {
-                let states: Vec<IslandBody> =
-                    moving.iter().zip(&loads).map(|(m, load)| m.island_body(tau, *load)).collect();
-                let state = |b: RigidBodyHandle| index.get(&b).map(|&i| states[i]);
-                let (responses, _) = self.solve_islands(world, &mut resting, &state, tau)?;
-                stats.implicit_contacts += resting.len();
-                for (r, (response, relative)) in resting.iter().zip(responses) {
-                    let [on_a, on_b] = r.law.on_bodies(&response);
-                    for (b, load) in [(r.bodies.0, on_a), (r.bodies.1, on_b)] {
-                        let Some(b) = b else { continue };
-                        match index.get(&b) {
-                            Some(&i) => {
-                                impulses[i].0 += load.0;
-                                impulses[i].1 += load.1;
-                                let s = &states[i];
-                                let (dv, dw) =
-                                    (load.0 * s.inverse_mass, s.inverse_inertia * load.1);
-                                ends[i].0 += dv;
-                                ends[i].1 += dw;
-                            }
-                            None => hold(b, load),
-                        }
-                    }
-                    if let Some((stretch, sliding)) =
-                        islands::spring_after(&r.law, &response, tau, relative)
-                    {
-                        if let Some(state) = self.states.get_mut(&r.pair) {
-                            state.tangential.displacement = stretch;
-                            state.tangential.sliding = sliding;
-                        }
-                    }
-                }
-            }
             for ((m, end), impulse) in moving.iter_mut().zip(ends).zip(impulses) {
                 m.advance(tau, end, impulse);
             }
@@ -504,5 +471,62 @@ impl DiscreteContacts {
             }
         }
         Ok(limits)
+    }
+
+    /// Adds to `limits` the half-period of the group's fastest vibration on its live contacts,
+    /// bounded from above by Gershgorin's theorem on the mass-weighted stiffness: `ω² <= 2 max_b
+    /// Σ_c k_c (1/m_b + r_c² j_b)`, over each body `b` of the group and its contacts `c`, with
+    /// `k_c` the contact's normal and tangential stiffness, `r_c` the lever to its point and
+    /// `j_b` the largest inverse inertia, and each contact's resistance to tilting against
+    /// `j_b`. A body pressed by several contacts vibrates faster than under any one (a ball in
+    /// a pile); the bound holds for any number of them, so the explicit sub-steps stay stable.
+    fn group_limit(
+        &self,
+        world: &PhysicsWorld,
+        pairs: &[Candidate],
+        moving: &[Moving],
+        index: &HashMap<RigidBodyHandle, usize>,
+        limits: &mut substeps::Limits,
+    ) {
+        let spring = self.tangential == TangentialLaw::Spring && !self.friction.is_none();
+        let mut rows = vec![0.0; moving.len()];
+        let mut widest: Vec<Option<(ColliderHandle, ColliderHandle)>> = vec![None; moving.len()];
+        for &(ca, cb, _) in pairs {
+            let Some(s) = self.states.get(&(ca, cb)) else { continue };
+            let Some(frame) = s.frame else { continue };
+            let k_n = s.normal_stiffness;
+            if !(k_n > 0.0 && k_n.is_finite()) {
+                continue;
+            }
+            let (ha, hb) = (&self.handled[&ca], &self.handled[&cb]);
+            let kappa = if spring { stiffness_ratio(&ha.material, &hb.material) } else { 0.0 };
+            let tilt = frame.rocking.to_cols_array().iter().step_by(4).sum::<Real>().max(0.0);
+            for (c, anchor) in [(ca, frame.anchors[0]), (cb, frame.anchors[1])] {
+                let Some(&i) = world.colliders[c].parent().and_then(|b| index.get(&b)) else {
+                    continue;
+                };
+                let m = &moving[i];
+                let relative =
+                    world.colliders[c].position_wrt_parent().map_or(Pose::IDENTITY, pose);
+                let point = (m.pose() * relative).transform_point(anchor);
+                let lever = (point - m.centre).length_squared();
+                let j = m
+                    .inverse_inertia()
+                    .to_cols_array()
+                    .iter()
+                    .step_by(4)
+                    .fold(0.0, |a: Real, x| a.max(*x));
+                let w = m.inverse_mass.max_element() + lever * j;
+                rows[i] += k_n * (1.0 + kappa) * w + tilt * j;
+                widest[i] = widest[i].or(Some((ca, cb)));
+            }
+        }
+        let fastest = rows.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1));
+        if let Some((i, &row)) = fastest.filter(|(_, r)| **r > 0.0) {
+            let half_period = core::f64::consts::PI / (2.0 * row).sqrt();
+            if let Some(pair) = widest[i] {
+                limits.resolve(half_period / self.per_half_period(), half_period, pair);
+            }
+        }
     }
 }

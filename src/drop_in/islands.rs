@@ -372,7 +372,8 @@ impl DiscreteContacts {
                 }
                 let ends = [island_body(Some(b1)), island_body(Some(b2))]
                     .map(|e| e.map(|e| slot((&mut index, &mut handles), e)));
-                if let Some(law) = self.joint_law(world, (b1, b2), &joint.data, ends, h) {
+                let now = |b: RigidBodyHandle| BodyNow::of(world, b);
+                if let Some(law) = self.joint_law(world, (b1, b2), &joint.data, ends, h, &now) {
                     joints.push((law, k));
                 }
             }
@@ -507,18 +508,18 @@ impl DiscreteContacts {
     /// where the body is not in an island) as a stiff spring on its locked axes over a
     /// sub-step of `h` (see [`solve_islands`](Self::solve_islands)); `None` where it locks
     /// nothing.
-    fn joint_law(
+    pub(super) fn joint_law(
         &self,
         world: &PhysicsWorld,
         (b1, b2): (RigidBodyHandle, RigidBodyHandle),
         data: &engine::prelude::GenericJoint,
         ends: [Option<usize>; 2],
         h: Real,
+        state: &dyn Fn(RigidBodyHandle) -> BodyNow,
     ) -> Option<JointLaw> {
         use engine::prelude::JointAxesMask;
-        let (r1, r2) = (&world.bodies[b1], &world.bodies[b2]);
-        let (p1, p2) = (pose(r1.position()), pose(r2.position()));
-        let (f1, f2) = (p1 * pose(&data.local_frame1), p2 * pose(&data.local_frame2));
+        let (s1, s2) = (state(b1), state(b2));
+        let (f1, f2) = (s1.pose * pose(&data.local_frame1), s2.pose * pose(&data.local_frame2));
         let axes = [Vector::X, Vector::Y, Vector::Z].map(|a| f1.rotation * a);
         let locked = data.locked_axes;
         let pick = |flags: [JointAxesMask; 3]| {
@@ -537,8 +538,9 @@ impl DiscreteContacts {
         }
         // The spring: stiff against the lighter moving end over the sub-step.
         let (mut mass, mut inertia): (Real, Real) = (Real::INFINITY, Real::INFINITY);
-        for (rb, end) in [(r1, ends[0]), (r2, ends[1])] {
+        for (b, end) in [(b1, ends[0]), (b2, ends[1])] {
             if end.is_some() {
+                let rb = &world.bodies[b];
                 mass = mass.min(real(rb.mass()));
                 let i = vector(rb.mass_properties().local_mprops.principal_inertia());
                 inertia = inertia.min(i.min_element());
@@ -549,18 +551,37 @@ impl DiscreteContacts {
         }
         let inertia = if inertia.is_finite() && inertia > 0.0 { inertia } else { 0.0 };
         let scale = 1.0 / (JOINT_RESOLUTION * h * h);
-        let (c1, c2) = (vector(r1.center_of_mass()), vector(r2.center_of_mass()));
-        let velocity = |rb: &engine::prelude::RigidBody| (vector(rb.linvel()), vector(rb.angvel()));
         Some(JointLaw {
             bodies: ends,
-            given: [velocity(r1), velocity(r2)],
-            levers: [f1.translation - c1, f2.translation - c2],
+            given: [s1.velocity, s2.velocity],
+            levers: [f1.translation - s1.centre, f2.translation - s2.centre],
             linear,
             angular,
             offset: f1.translation - f2.translation,
             turn: (f1.rotation * f2.rotation.inverse()).to_scaled_axis(),
             stiffness: (mass * scale, inertia * scale),
         })
+    }
+}
+
+/// A body as a joint's law sees it: the pose of its frame, its centre of mass and its
+/// velocities, now.
+#[derive(Clone, Copy)]
+pub(super) struct BodyNow {
+    pub(super) pose: Pose,
+    pub(super) centre: Vector,
+    pub(super) velocity: Motion,
+}
+
+impl BodyNow {
+    /// Body `b` as the world has it.
+    pub(super) fn of(world: &PhysicsWorld, b: RigidBodyHandle) -> Self {
+        let rb = &world.bodies[b];
+        BodyNow {
+            pose: pose(rb.position()),
+            centre: vector(rb.center_of_mass()),
+            velocity: (vector(rb.linvel()), vector(rb.angvel())),
+        }
     }
 }
 

@@ -139,6 +139,8 @@ struct Pass {
     impacts: bool,
     /// Inside an impact's own sub-steps: its impacts evaluated and applied as they are.
     sub_cycle: bool,
+    /// How many times finer than their advice impacts' own sub-steps are (a step redone).
+    refine: usize,
 }
 
 /// A candidate pair last found apart: the exact distance's margin over the contact
@@ -266,6 +268,10 @@ pub struct DiscreteContacts {
     /// limit).
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     deepest: Option<(Real, (ColliderHandle, ColliderHandle), Real, Real)>,
+    /// This step is taken explicitly, though the integration is implicit: an impact struck a
+    /// body on an impulse joint (see `impacts`).
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    explicit_step: bool,
     /// Steps taken: where an error says when it happened.
     #[cfg_attr(feature = "checkpoint", serde(default))]
     steps: u64,
@@ -340,6 +346,7 @@ impl DiscreteContacts {
             impacts: HashMap::default(),
             elastic: HashMap::default(),
             deepest: None,
+            explicit_step: false,
             steps: 0,
             generation: 0,
             neighbours: Default::default(),
@@ -445,6 +452,7 @@ impl DiscreteContacts {
         self.integration == Integration::Implicit
             && self.lubrication.is_none()
             && self.settings.enlargement() == [0.0, 0.0]
+            && !self.explicit_step
     }
 
     /// With another answer to a step that fails its check (see [`FailedStep`]; the default is
@@ -597,22 +605,31 @@ impl DiscreteContacts {
         let snapshot = self.snapshot(world);
         let before = self.ledger(world, rest_speed);
         let mut multiplier = 1;
+        self.explicit_step = false;
         loop {
             self.deepest = None;
             let (problem, refused) = match self.try_step(world, hooks, events, dt, multiplier) {
-                Ok(stats) => match self.verify(world, &before, dt) {
+                Ok(Some(stats)) => match self.verify(world, &before, dt) {
                     None => {
                         self.steps += 1;
+                        self.explicit_step = false;
                         return Ok(stats);
                     }
                     Some(problem) => (problem, None),
                 },
+                // An impact struck a body on a joint: the step again, explicitly.
+                Ok(None) => {
+                    self.restore(world, &snapshot);
+                    self.explicit_step = true;
+                    continue;
+                }
                 Err(Error::StepRejected { pair, problem, .. }) => ((pair, problem), None),
                 Err(e) => ((String::new(), String::new()), Some(e)),
             };
             self.restore(world, &snapshot);
             if let Some(e) = refused {
                 self.steps += 1;
+                self.explicit_step = false;
                 return Err(e);
             }
             let more = multiplier * 4;
@@ -625,6 +642,7 @@ impl DiscreteContacts {
             if self.failed_step == FailedStep::Refuse || !allowed {
                 let step = self.steps;
                 self.steps += 1;
+                self.explicit_step = false;
                 return Err(Error::StepRejected { step, pair: problem.0, problem: problem.1 });
             }
             multiplier = more;
@@ -632,7 +650,8 @@ impl DiscreteContacts {
     }
 
     /// One attempt at the step of `dt`, in `multiplier` times the sub-steps the advice asks
-    /// for.
+    /// for; `None` where an impact struck a body on an impulse joint under implicit
+    /// integration, which the step must then take explicitly.
     fn try_step(
         &mut self,
         world: &mut PhysicsWorld,
@@ -640,7 +659,7 @@ impl DiscreteContacts {
         events: &dyn EventHandler,
         dt: Real,
         multiplier: usize,
-    ) -> Result<StepStats> {
+    ) -> Result<Option<StepStats>> {
         let builds = self.neighbour_builds();
         let rest_speed = self.rest_speed(world, dt);
         let substeps = self.substeps_with(world, hooks, dt)? * multiplier;
@@ -656,11 +675,27 @@ impl DiscreteContacts {
         self.set_aside_collision_types(world);
         let mut result = Ok(());
         let implicit = self.implicit();
-        let pass = Pass { h, rest_speed, resting: implicit, impacts: implicit, sub_cycle: false };
+        let records = self.integration == Integration::Implicit;
+        let pass = Pass {
+            h,
+            rest_speed,
+            resting: implicit,
+            impacts: records,
+            sub_cycle: false,
+            refine: multiplier,
+        };
+        let mut jointed = false;
         for k in 0..substeps {
-            if let Err(e) = self.apply_forces(world, hooks, &mut stats, k == 0, pass) {
-                result = Err(e);
-                break;
+            match self.apply_forces(world, hooks, &mut stats, k == 0, pass) {
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+                Ok(false) => {
+                    jointed = true;
+                    break;
+                }
+                Ok(true) => {}
             }
             world.step_with_events(&Hooks { handled: &self.handled, user: hooks }, events);
             take_back(world, &self.buffers.applied);
@@ -669,10 +704,13 @@ impl DiscreteContacts {
         world.integration_parameters.num_solver_iterations = saved.1;
         self.restore_collision_types(world);
         result?;
+        if jointed {
+            return Ok(None);
+        }
         self.wrap_bodies(world);
         stats.contacts = self.states.len();
         stats.neighbour_builds = self.neighbour_builds() - builds;
-        Ok(stats)
+        Ok(Some(stats))
     }
 
     /// The speed (m/s) below which two bodies meet without an impact under

@@ -188,7 +188,8 @@ fn built(scene: Scene) -> Built {
             ground(&mut w, 5.0);
             let mut bodies = Vec::new();
             for row in 0..rows {
-                // Every other row a brick shorter, shifted half a brick: no brick overhangs.
+                // Every other row a brick shorter, shifted half a brick: a long row's end
+                // bricks rest on half their length, their centres over the edge below.
                 let n = per_row - row % 2;
                 for i in 0..n {
                     let x = (2 * i) as Real * half.x - (n - 1) as Real * half.x;
