@@ -475,3 +475,50 @@ fn rapier_pairs_no_handled_colliders_and_keeps_its_own_contacts() {
         beside_a_ball_left_to_rapier(ActiveCollisionTypes::DYNAMIC_FIXED, 3);
     assert!(world.narrow_phase.contact_pair(floor, handled).is_some(), "the types must stay");
 }
+
+/// Two boxes stacked on a floor; the top one removed mid-run (its body with its colliders, or
+/// its collider alone): the next steps run, the removed collider's contacts end, and the box
+/// left keeps resting where it was.
+#[test]
+fn removing_a_body_or_a_collider_mid_run_ends_its_contacts() {
+    for remove_body in [true, false] {
+        let mut world = PhysicsWorld::new();
+        world.integration_parameters.dt = 1.0 / 60.0;
+        let floor = world.insert_body(RigidBodyBuilder::fixed());
+        world.insert_collider(ColliderBuilder::cuboid(1.0, 0.1, 1.0), Some(floor));
+        let mut boxes = Vec::new();
+        for k in 0..2 {
+            let b =
+                world.insert_body(RigidBodyBuilder::dynamic().translation(
+                    discrete_contact::math::Vector::new(0.0, 0.15 + 0.1 * k as f64, 0.0),
+                ));
+            let c = world.insert_collider(ColliderBuilder::cuboid(0.05, 0.05, 0.05), Some(b));
+            boxes.push((b, c));
+        }
+        let mut contacts =
+            DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+                .unwrap();
+        contacts.handle_all(&mut world, Material::new(1e8, 0.3).unwrap()).unwrap();
+        for _ in 0..60 {
+            contacts.step(&mut world).unwrap();
+        }
+        let (bottom, bottom_collider) = boxes[0];
+        let (top, top_collider) = boxes[1];
+        assert!(contacts.contact(bottom_collider, top_collider).is_some(), "the boxes never met");
+        let resting = world.bodies[bottom].translation();
+        if remove_body {
+            world.remove_body_with_colliders(top, true);
+        } else {
+            world.remove_collider(top_collider);
+        }
+        for _ in 0..60 {
+            contacts.step(&mut world).unwrap();
+        }
+        assert!(contacts.contact(bottom_collider, top_collider).is_none());
+        assert_eq!(contacts.contact_count(), 1, "only the bottom box's contact with the floor");
+        let rb = &world.bodies[bottom];
+        // Unloaded, the bottom box rises by the few micrometres its neighbour pressed it in.
+        assert!((rb.translation() - resting).length() < 1e-4, "{:?}", rb.translation() - resting);
+        assert!(rb.linvel().length() < 1e-3, "{:?}", rb.linvel());
+    }
+}

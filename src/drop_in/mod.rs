@@ -546,6 +546,28 @@ impl DiscreteContacts {
         Ok(n)
     }
 
+    /// Forgets the handled colliders the world no longer holds (removed with their body or
+    /// alone since the last step): their contacts end, and nothing of them is looked up again.
+    fn forget_removed(&mut self, world: &PhysicsWorld) {
+        let gone: Vec<ColliderHandle> =
+            self.handled.keys().filter(|c| world.colliders.get(**c).is_none()).copied().collect();
+        if gone.is_empty() {
+            return;
+        }
+        for c in &gone {
+            self.handled.remove(c);
+            self.queries.remove(c);
+            self.set_aside.remove(c);
+        }
+        let kept =
+            |(a, b): &(ColliderHandle, ColliderHandle)| !gone.contains(a) && !gone.contains(b);
+        self.states.retain(|pair, _| kept(pair));
+        self.gaps.retain(|pair, _| kept(pair));
+        self.impacts.retain(|pair, _| kept(pair));
+        self.elastic.retain(|pair, _| kept(pair));
+        self.generation += 1;
+    }
+
     /// Builds the missing query shapes of handled colliders (all of them after a restart).
     fn restore_queries(&mut self, world: &PhysicsWorld) -> Result<()> {
         if self.queries.len() == self.handled.len() {
@@ -599,6 +621,7 @@ impl DiscreteContacts {
     ) -> Result<StepStats> {
         let dt = real(world.integration_parameters.dt);
         check_positive("integration_parameters.dt", dt)?;
+        self.forget_removed(world);
         self.restore_queries(world)?;
         self.compute_masses(world);
         let rest_speed = self.rest_speed(world, dt);
