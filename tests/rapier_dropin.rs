@@ -522,3 +522,111 @@ fn removing_a_body_or_a_collider_mid_run_ends_its_contacts() {
         assert!(rb.linvel().length() < 1e-3, "{:?}", rb.linvel());
     }
 }
+
+/// Collects the collision events a step reports.
+#[derive(Default)]
+struct Collisions(std::sync::Mutex<Vec<CollisionEvent>>);
+
+impl EventHandler for Collisions {
+    fn handle_collision_event(
+        &self,
+        _: &RigidBodySet,
+        _: &ColliderSet,
+        event: CollisionEvent,
+        _: Option<&ContactPair>,
+    ) {
+        self.0.lock().unwrap().push(event);
+    }
+    fn handle_contact_force_event(
+        &self,
+        _: f64,
+        _: &RigidBodySet,
+        _: &ColliderSet,
+        _: &ContactPair,
+        _: f64,
+    ) {
+    }
+    fn handle_soft_body_tear_event(&self, _: &SoftBodySet, _: &SoftBodyTearEvent) {}
+}
+
+/// The collision events of a scene run with rapier's own contacts and with the drop-in: two
+/// balls meeting head-on and parting (an impact shorter than the step), a box built resting on
+/// the floor, a ball without collision events (nor the floor) bouncing on the floor, and the
+/// box removed. Rapier and the drop-in report the same events, within a few steps of each
+/// other: the balls' start and end, the box's start, and its end marked as a removal.
+#[test]
+fn collision_events_of_handled_pairs_are_rapiers() {
+    let run = |discrete: bool| -> Vec<(usize, String)> {
+        let mut world = PhysicsWorld::new();
+        world.integration_parameters.dt = 1.0 / 60.0;
+        let events = ActiveEvents::COLLISION_EVENTS;
+        let floor = world.insert_body(RigidBodyBuilder::fixed());
+        world.insert_collider(ColliderBuilder::cuboid(2.0, 0.1, 2.0), Some(floor));
+        let v = discrete_contact::math::Vector::new;
+        let mut ball = |x: f64, vx: f64, y: f64, active: ActiveEvents| {
+            let b = world.insert_body(
+                RigidBodyBuilder::dynamic()
+                    .translation(v(x, y, 0.0))
+                    .linvel(v(vx, 0.0, 0.0))
+                    .gravity_scale(if y > 1.0 { 0.0 } else { 1.0 }),
+            );
+            world.insert_collider(
+                ColliderBuilder::ball(0.05).restitution(0.9).active_events(active),
+                Some(b),
+            );
+            b
+        };
+        ball(-0.3, 2.0, 2.0, events);
+        ball(0.3, -2.0, 2.0, events);
+        ball(1.0, 0.0, 0.5, ActiveEvents::empty());
+        let boxed = world.insert_body(RigidBodyBuilder::dynamic().translation(v(-1.0, 0.15, 0.0)));
+        world.insert_collider(
+            ColliderBuilder::cuboid(0.05, 0.05, 0.05).active_events(events),
+            Some(boxed),
+        );
+        let mut contacts =
+            DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9)
+                .unwrap();
+        if discrete {
+            contacts.handle_all(&mut world, Material::new(1e8, 0.3).unwrap()).unwrap();
+        }
+        let collector = Collisions::default();
+        let mut seen = Vec::new();
+        for step in 0..90 {
+            if step == 60 {
+                world.remove_body_with_colliders(boxed, true);
+            }
+            if discrete {
+                contacts.step_with_events(&mut world, &(), &collector).unwrap();
+            } else {
+                world.step_with_events(&(), &collector);
+            }
+            for e in collector.0.lock().unwrap().drain(..) {
+                let removed = matches!(e, CollisionEvent::Stopped(_, _, f) if f.contains(CollisionEventFlags::REMOVED));
+                let mut pair = [e.collider1().into_raw_parts().0, e.collider2().into_raw_parts().0];
+                pair.sort();
+                seen.push((
+                    step,
+                    format!(
+                        "{} {pair:?}{}",
+                        if e.started() { "started" } else { "stopped" },
+                        if removed { " removed" } else { "" }
+                    ),
+                ));
+            }
+        }
+        seen
+    };
+    let rapier = run(false);
+    let discrete = run(true);
+    assert_eq!(rapier.len(), 4, "rapier's own: {rapier:?}");
+    // The same events in the same order, each within three steps of rapier's (rapier's pair
+    // stays touching while within its prediction distance, the drop-in's impact ends within
+    // the step it began in); the removal at once.
+    let events = |v: &[(usize, String)]| v.iter().map(|e| e.1.clone()).collect::<Vec<_>>();
+    assert_eq!(events(&discrete), events(&rapier), "{discrete:?} against {rapier:?}");
+    for (d, r) in discrete.iter().zip(&rapier) {
+        assert!(d.0.abs_diff(r.0) <= 3, "{discrete:?} against {rapier:?}");
+    }
+    assert_eq!(discrete.last().unwrap().0, 60);
+}

@@ -372,19 +372,20 @@ impl DiscreteContacts {
         slots: &mut Vec<Option<Box<ContactState>>>,
         checks: &mut Vec<Result<Checked>>,
     ) -> Result<()> {
-        let keep = |states: &mut HashMap<_, _>, slots: &mut Vec<Option<Box<ContactState>>>| {
+        let keep = |this: &mut Self, slots: &mut Vec<Option<Box<ContactState>>>| {
             for (&(ca, cb, _), slot) in pairs.iter().zip(slots.drain(..)) {
                 if let Some(state) = slot {
-                    states.insert((ca, cb), state);
+                    this.states.insert((ca, cb), state);
+                    this.touched.insert((ca, cb));
                 }
             }
         };
         if let Some(k) = checks.iter().position(|e| e.is_err()) {
-            keep(&mut self.states, slots);
+            keep(self, slots);
             return Err(checks.swap_remove(k).err().expect("an error was found"));
         }
         self.states.clear();
-        keep(&mut self.states, slots);
+        keep(self, slots);
         Ok(())
     }
 

@@ -369,6 +369,7 @@ impl DiscreteContacts {
             for (&(ca, cb, _), slot) in pairs.iter().zip(slots.drain(..)) {
                 if let Some(state) = slot {
                     self.states.insert((ca, cb), state);
+                    self.touched.insert((ca, cb));
                 }
             }
             if let Some(k) = checks.iter().position(|e| e.is_err()) {

@@ -3,6 +3,7 @@
 //! rapier's numbers and the contact model's f64 in `boundary`.
 
 mod candidates;
+mod events;
 mod forces;
 mod hooks;
 mod impacts;
@@ -17,9 +18,9 @@ use hooks::Hooks;
 use super::boundary::{engine_real, engine_vector, pose, real, vector};
 use super::{boundary, engine};
 use engine::prelude::{
-    ActiveCollisionTypes, ActiveHooks, Collider, ColliderHandle, ContactModificationContext,
-    EventHandler, PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodyType,
-    SolverFlags,
+    ActiveCollisionTypes, ActiveEvents, ActiveHooks, Collider, ColliderHandle, CollisionEvent,
+    CollisionEventFlags, ContactModificationContext, EventHandler, PairFilterContext, PhysicsHooks,
+    PhysicsWorld, RigidBodyHandle, RigidBodyType, SolverFlags,
 };
 use std::ops::Bound::{Excluded, Included};
 
@@ -47,6 +48,7 @@ pub use verify::{FailedStep, ENERGY_TOLERANCE, REST_FRACTION};
 
 /// The drop-in's maps, keyed by handles: a fixed-seed fast hash (see `Cargo.toml`).
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
+type HashSet<K> = std::collections::HashSet<K, foldhash::fast::FixedState>;
 
 /// A handled collider: its SDF and material.
 #[derive(Clone, Debug)]
@@ -288,6 +290,13 @@ pub struct DiscreteContacts {
     /// A sub-step's lists, kept between sub-steps.
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     buffers: SubstepBuffers,
+    /// The pairs whose contact's start went out as a collision event and whose end has not
+    /// (see `events`).
+    #[cfg_attr(feature = "checkpoint", serde(default))]
+    reported: HashSet<(ColliderHandle, ColliderHandle)>,
+    /// Every pair with a live contact at some point of the step's attempt so far.
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    touched: HashSet<(ColliderHandle, ColliderHandle)>,
 }
 
 /// The drop-in's tangential law unless set: the spring, so that a scene at rest stays at rest.
@@ -352,6 +361,8 @@ impl DiscreteContacts {
             neighbours: Default::default(),
             set_aside: HashMap::default(),
             buffers: SubstepBuffers::default(),
+            reported: HashSet::default(),
+            touched: HashSet::default(),
         })
     }
 
@@ -548,12 +559,14 @@ impl DiscreteContacts {
 
     /// Forgets the handled colliders the world no longer holds (removed with their body or
     /// alone since the last step): their contacts end, and nothing of them is looked up again.
-    fn forget_removed(&mut self, world: &PhysicsWorld) {
+    /// Their reported contacts' ends go to `events` (see `events`).
+    fn forget_removed(&mut self, world: &PhysicsWorld, events: &dyn EventHandler) {
         let gone: Vec<ColliderHandle> =
             self.handled.keys().filter(|c| world.colliders.get(**c).is_none()).copied().collect();
         if gone.is_empty() {
             return;
         }
+        self.report_removed(world, &gone, events);
         for c in &gone {
             self.handled.remove(c);
             self.queries.remove(c);
@@ -612,7 +625,9 @@ impl DiscreteContacts {
     /// bodies can hold, a body at a non-finite place, or energy the step created beyond the
     /// contacts' stored energy and the users' forces' work undoes it; it is taken again in
     /// four times the sub-steps, or refused with [`Error::StepRejected`] and the world left
-    /// as it was. Events of an undone attempt have reached `events` already.
+    /// as it was. Rapier's own events of an undone attempt (pairs the drop-in does not handle)
+    /// have reached `events` already; the handled pairs' collision events go out once the
+    /// step has passed its check (see the `rapier` module).
     pub fn step_with_events(
         &mut self,
         world: &mut PhysicsWorld,
@@ -621,7 +636,7 @@ impl DiscreteContacts {
     ) -> Result<StepStats> {
         let dt = real(world.integration_parameters.dt);
         check_positive("integration_parameters.dt", dt)?;
-        self.forget_removed(world);
+        self.forget_removed(world, events);
         self.restore_queries(world)?;
         self.compute_masses(world);
         let rest_speed = self.rest_speed(world, dt);
@@ -636,6 +651,7 @@ impl DiscreteContacts {
                     None => {
                         self.steps += 1;
                         self.explicit_step = false;
+                        self.report_collisions(world, events);
                         return Ok(stats);
                     }
                     Some(problem) => (problem, None),
@@ -684,6 +700,7 @@ impl DiscreteContacts {
         multiplier: usize,
     ) -> Result<Option<StepStats>> {
         let builds = self.neighbour_builds();
+        self.touched.clear();
         let rest_speed = self.rest_speed(world, dt);
         let substeps = self.substeps_with(world, hooks, dt)? * multiplier;
         let saved =
