@@ -15,8 +15,10 @@
 //! `filter_contact_pair` hook on colliders that asked for it before they were handed over.
 //! Handled pairs report rapier's collision events themselves (`Started` and `Stopped`, a
 //! removed collider's with `REMOVED`, through [`DiscreteContacts::step_with_events`], without
-//! a `ContactPair`, which only rapier can build); they report no contact-force events. Bodies
-//! and colliders may be removed between steps: their contacts end at the next step.
+//! a `ContactPair`, which only rapier can build); they report no contact-force events. What
+//! each live contact carried over the last step — point, normal, indentation, force — is read
+//! from [`DiscreteContacts::contacts`]. Bodies and colliders may be removed between steps:
+//! their contacts end at the next step.
 //!
 //! **Small bodies**: rapier sizes its broad-phase margins by
 //! `integration_parameters.length_unit` (1 m by default). For millimetre bodies set it to their

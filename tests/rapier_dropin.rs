@@ -630,3 +630,62 @@ fn collision_events_of_handled_pairs_are_rapiers() {
     }
     assert_eq!(discrete.last().unwrap().0, 60);
 }
+
+/// The contacts' readout of a stack at rest: three 10 cm boxes on a floor tilted by 10°,
+/// stuck by friction (μ_s = 0.5 > tan 10°; upright, as tan 10° < 1/3). Each contact carries
+/// the weight of the boxes above it: its normal force `n m g cos 10°` and its friction
+/// `n m g sin 10°` (within 1 %),
+/// sticking, the normal across the slope; the floor's contacts are the box's one.
+#[test]
+fn the_contacts_readout_carries_the_weight_above_each_contact() {
+    let tilt: f64 = 10f64.to_radians();
+    let mut world = PhysicsWorld::new();
+    world.integration_parameters.dt = 1.0 / 60.0;
+    world.integration_parameters.length_unit = 0.1;
+    let turn = discrete_contact::math::Vector::new(0.0, 0.0, tilt);
+    let up = discrete_contact::math::Rotation::from_scaled_axis(turn)
+        * discrete_contact::math::Vector::Y;
+    let floor = world.insert_body(RigidBodyBuilder::fixed().rotation(turn));
+    let floor_collider = world.insert_collider(ColliderBuilder::cuboid(1.0, 0.1, 1.0), Some(floor));
+    let mut boxes = Vec::new();
+    for k in 0..3 {
+        let b = world.insert_body(
+            RigidBodyBuilder::dynamic().translation(up * (0.15 + 0.1 * k as f64)).rotation(turn),
+        );
+        boxes.push(
+            world.insert_collider(
+                ColliderBuilder::cuboid(0.05, 0.05, 0.05).density(1000.0),
+                Some(b),
+            ),
+        );
+    }
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+            .unwrap()
+            .with_friction(discrete_contact::Friction::new(0.5, 0.4, 1e-3).unwrap());
+    contacts.handle_all(&mut world, Material::new(1e8, 0.3).unwrap()).unwrap();
+    assert_eq!(contacts.contacts().count(), 0, "no readout before the first step");
+    for _ in 0..120 {
+        contacts.step(&mut world).unwrap();
+    }
+    let weight = 1.0 * 9.81;
+    assert_eq!(contacts.contacts().count(), 3);
+    let below = [floor_collider, boxes[0], boxes[1]];
+    for (k, (&under, &over)) in below.iter().zip(&boxes).enumerate() {
+        let carried = (3 - k) as f64 * weight;
+        let c = contacts
+            .contacts_with(over)
+            .find(|r| r.colliders == (under, over) || r.colliders == (over, under))
+            .unwrap_or_else(|| panic!("no contact under box {k}"));
+        // Signs: the reading is of A; the box above is pushed up the normal.
+        let on_box = if c.colliders.0 == over { c.force_on_a } else { -c.force_on_a };
+        let n = on_box.dot(up);
+        let t = (on_box - up * n).length();
+        assert!((n / (carried * tilt.cos()) - 1.0).abs() < 0.01, "box {k}: normal force {n}");
+        assert!((t / (carried * tilt.sin()) - 1.0).abs() < 0.01, "box {k}: friction {t}");
+        assert!((c.normal_force().abs() / n - 1.0).abs() < 0.01, "box {k}: {c:?}");
+        assert!(c.normal.dot(up).abs() > 0.999, "box {k}: normal {:?}", c.normal);
+        assert!(c.indentation > 0.0 && c.volume > 0.0 && !c.sliding, "box {k}: {c:?}");
+    }
+    assert_eq!(contacts.contacts_with(floor_collider).count(), 1);
+}

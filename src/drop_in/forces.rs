@@ -286,6 +286,12 @@ impl DiscreteContacts {
             if self.states.contains_key(&(ca, cb)) && !matches!(c.treatment, Treatment::Impact) {
                 self.elastic.insert((ca, cb), c.elastic);
                 self.note_depth((ca, cb), c.indentation);
+                let explicit = matches!(c.treatment, Treatment::Explicit);
+                self.note_reading(
+                    (ca, cb),
+                    c,
+                    if explicit { c.force_on_a * h } else { Vector::ZERO },
+                );
             }
         }
         self.gaps = gaps;
@@ -326,6 +332,7 @@ impl DiscreteContacts {
                 let depth = r.law.normal_law.depth - h * r.law.normal.dot(relative.0 .0);
                 stats.max_indentation = stats.max_indentation.max(depth);
                 self.note_depth(r.pair, depth);
+                self.note_implicit(r.pair, on_a.0, depth);
                 if let Some((stretch, sliding)) =
                     islands::spring_after(&r.law, &response, h, relative)
                 {
@@ -437,6 +444,7 @@ impl DiscreteContacts {
             torques: (Vector::ZERO, Vector::ZERO),
             refresh: None,
             indentation: 0.0,
+            place: None,
             treatment,
             impact: None,
             approach: 0.0,
@@ -557,6 +565,7 @@ impl DiscreteContacts {
             torques: (f.torque_on_a, f.torque_on_b),
             refresh: out.refresh,
             indentation: g.indentation,
+            place: Some((g.contact_point, g.normal, g.volume)),
             treatment,
             impact: window,
             approach: f.approach_speed,

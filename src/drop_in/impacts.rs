@@ -386,6 +386,7 @@ impl DiscreteContacts {
                 if self.states.contains_key(&(ca, cb)) {
                     self.elastic.insert((ca, cb), c.elastic);
                     self.note_depth((ca, cb), c.indentation);
+                    self.note_reading((ca, cb), c, c.force_on_a * tau);
                 }
                 stats.evaluations += 1;
                 for (b, f, torque) in [

@@ -10,6 +10,7 @@ mod impacts;
 mod islands;
 mod neighbours;
 mod network;
+mod readout;
 mod substeps;
 mod verify;
 
@@ -44,6 +45,7 @@ pub use crate::substep::{
 use crate::tangential::{stiffness_ratio, TangentialLaw};
 use neighbours::NeighbourList;
 use parry3d_f64::shape::SharedShape;
+pub use readout::ContactReading;
 pub use verify::{FailedStep, ENERGY_TOLERANCE, REST_FRACTION};
 
 /// The drop-in's maps, keyed by handles: a fixed-seed fast hash (see `Cargo.toml`).
@@ -103,6 +105,9 @@ struct Evaluated {
     torques: (Vector, Vector),
     refresh: Option<crate::contact::Refresh>,
     indentation: Real,
+    /// Where it touches: contact point, normal from B to A (world) and overlap volume; `None`
+    /// for a pair about to touch.
+    place: Option<(Vector, Vector, Real)>,
     /// How its force is taken.
     treatment: Treatment,
     /// For a contact that began on this sub-step as an impact: how long it counts as one (s).
@@ -297,6 +302,12 @@ pub struct DiscreteContacts {
     /// Every pair with a live contact at some point of the step's attempt so far.
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     touched: HashSet<(ColliderHandle, ColliderHandle)>,
+    /// The live contacts after the last step (see `readout`).
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    readings: Vec<ContactReading>,
+    /// The contacts' records over the step's attempt so far.
+    #[cfg_attr(feature = "checkpoint", serde(skip))]
+    step_readings: HashMap<(ColliderHandle, ColliderHandle), readout::Reading>,
 }
 
 /// The drop-in's tangential law unless set: the spring, so that a scene at rest stays at rest.
@@ -363,6 +374,8 @@ impl DiscreteContacts {
             buffers: SubstepBuffers::default(),
             reported: HashSet::default(),
             touched: HashSet::default(),
+            readings: Vec::new(),
+            step_readings: HashMap::default(),
         })
     }
 
@@ -652,6 +665,7 @@ impl DiscreteContacts {
                         self.steps += 1;
                         self.explicit_step = false;
                         self.report_collisions(world, events);
+                        self.keep_readings(dt);
                         return Ok(stats);
                     }
                     Some(problem) => (problem, None),
@@ -701,6 +715,7 @@ impl DiscreteContacts {
     ) -> Result<Option<StepStats>> {
         let builds = self.neighbour_builds();
         self.touched.clear();
+        self.step_readings.clear();
         let rest_speed = self.rest_speed(world, dt);
         let substeps = self.substeps_with(world, hooks, dt)? * multiplier;
         let saved =
