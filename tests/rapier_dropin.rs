@@ -689,3 +689,53 @@ fn the_contacts_readout_carries_the_weight_above_each_contact() {
     }
     assert_eq!(contacts.contacts_with(floor_collider).count(), 1);
 }
+
+/// `handle_all` names the colliders it leaves to rapier's own contacts, and why: a triangle
+/// mesh, a height field and a compound are not convex solids; the ball and the box are
+/// handled.
+#[test]
+fn handle_all_names_the_colliders_it_leaves_to_rapier() {
+    use discrete_contact::math::{Pose, Vector};
+    let mut world = PhysicsWorld::new();
+    let ground = world.insert_body(RigidBodyBuilder::fixed());
+    let mesh = world.insert_collider(
+        ColliderBuilder::trimesh(
+            vec![
+                Vector::new(-1.0, 0.0, -1.0),
+                Vector::new(1.0, 0.0, -1.0),
+                Vector::new(0.0, 0.0, 1.0),
+            ],
+            vec![[0, 1, 2]],
+        )
+        .unwrap(),
+        Some(ground),
+    );
+    let field = world.insert_collider(
+        ColliderBuilder::heightfield(
+            discrete_contact::rapier3d_f64::parry::utils::Array2::zeros(3, 3),
+            Vector::new(2.0, 1.0, 2.0),
+        ),
+        Some(ground),
+    );
+    let body =
+        world.insert_body(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 0.0)));
+    let ball = world.insert_collider(ColliderBuilder::ball(0.1), Some(body));
+    let cuboid = world.insert_collider(ColliderBuilder::cuboid(0.1, 0.1, 0.1), Some(body));
+    let dumbbell = world.insert_collider(
+        ColliderBuilder::compound(vec![
+            (Pose::from_translation(Vector::new(-0.2, 0.0, 0.0)), SharedShape::ball(0.1)),
+            (Pose::from_translation(Vector::new(0.2, 0.0, 0.0)), SharedShape::ball(0.1)),
+        ]),
+        Some(body),
+    );
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+            .unwrap();
+    let left = contacts.handle_all(&mut world, Material::new(1e7, 0.3).unwrap()).unwrap();
+    let named: Vec<ColliderHandle> = left.iter().map(|(c, _)| *c).collect();
+    assert_eq!(named, vec![mesh, field, dumbbell]);
+    for (c, why) in &left {
+        assert!(matches!(why, Error::UnsupportedShape { .. }), "{c:?}: {why}");
+    }
+    assert!(!named.contains(&ball) && !named.contains(&cuboid));
+}

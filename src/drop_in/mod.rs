@@ -556,18 +556,26 @@ impl DiscreteContacts {
         self.generation += 1;
     }
 
-    /// Hands every collider with a convex shape to the discrete contact; returns how many.
-    pub fn handle_all(&mut self, world: &mut PhysicsWorld, material: Material) -> Result<usize> {
+    /// Hands every collider whose shape is a convex solid to the discrete contact; returns
+    /// the colliders it left to rapier's own contacts, each with why (triangle meshes, height
+    /// fields, compounds and other shapes that are not convex solids:
+    /// [`Error::UnsupportedShape`]), in the world's order. An empty list: every collider is
+    /// handled.
+    pub fn handle_all(
+        &mut self,
+        world: &mut PhysicsWorld,
+        material: Material,
+    ) -> Result<Vec<(ColliderHandle, Error)>> {
         let all: Vec<ColliderHandle> = world.colliders.iter().map(|(h, _)| h).collect();
-        let mut n = 0;
+        let mut left = Vec::new();
         for h in all {
             let co = &mut world.colliders[h];
-            if let Ok(shapes) = Self::shapes_of(co) {
-                self.hand_over(co, h, material, shapes);
-                n += 1;
+            match Self::shapes_of(co) {
+                Ok(shapes) => self.hand_over(co, h, material, shapes),
+                Err(why) => left.push((h, why)),
             }
         }
-        Ok(n)
+        Ok(left)
     }
 
     /// Forgets the handled colliders the world no longer holds (removed with their body or

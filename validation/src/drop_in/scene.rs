@@ -200,7 +200,8 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
         per_contact,
     )?
     .with_geometry_reuse(reuse)?;
-    let handled = contacts.handle_all(&mut world, rubber()?)?;
+    let left = contacts.handle_all(&mut world, rubber()?)?;
+    let handled = world.colliders.len() - left.len();
     // (then `contacts.step(&mut world)?` where the loop had `world.step()`)
 
     let forms = if exact { ", exact forms where they exist" } else { "" };
