@@ -739,3 +739,43 @@ fn handle_all_names_the_colliders_it_leaves_to_rapier() {
     }
     assert!(!named.contains(&ball) && !named.contains(&cuboid));
 }
+
+/// Rapier caps the speeds it integrates with (400 lengths of `length_unit` per second): two
+/// 1 cm steel balls meeting at 10 m/s each with `length_unit` 0.01 (a cap of 4 m/s) rebound,
+/// each on its own side, leaving at the cap — as rapier's own contacts would. Before, an impact
+/// resolved in its own sub-steps placed the bodies for their uncapped speed and rapier's capped
+/// step carried them through each other.
+#[test]
+fn an_impact_past_rapiers_speed_cap_never_passes_through() {
+    let v = discrete_contact::math::Vector::new;
+    let mut world = PhysicsWorld::new();
+    world.gravity = v(0.0, 0.0, 0.0);
+    world.integration_parameters.dt = 1.0 / 60.0;
+    world.integration_parameters.length_unit = 0.01;
+    let mut balls = Vec::new();
+    for side in [-1.0, 1.0] {
+        let b = world.insert_body(
+            RigidBodyBuilder::dynamic().translation(v(side * 0.11, 0.0, 0.0)).linvel(v(
+                -side * 10.0,
+                0.0,
+                0.0,
+            )),
+        );
+        world.insert_collider(ColliderBuilder::ball(0.01).density(7800.0), Some(b));
+        balls.push(b);
+    }
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 1.0)
+            .unwrap();
+    contacts.handle_all(&mut world, Material::new(2e11, 0.3).unwrap()).unwrap();
+    for step in 0..10 {
+        contacts.step(&mut world).unwrap();
+        let x = world.bodies[balls[1]].translation().x - world.bodies[balls[0]].translation().x;
+        assert!(x > 0.019, "step {step}: the balls' centres {x} m apart, crossed");
+    }
+    let cap = world.integration_parameters.max_linear_velocity();
+    for (b, side) in balls.iter().zip([-1.0, 1.0]) {
+        let u = world.bodies[*b].linvel().x * side;
+        assert!((u / cap - 1.0).abs() < 1e-9, "leaving at {u} m/s, rapier's cap {cap}");
+    }
+}

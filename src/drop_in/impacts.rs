@@ -27,6 +27,35 @@ use super::*;
 use crate::implicit::IslandBody;
 use crate::math::{Matrix, Rotation};
 
+/// The turn per step beyond which rapier caps a body's angular velocity, unless the body
+/// allows fast rotation (rapier 0.36's solver, `MAX_ROTATION`).
+const RAPIER_MAX_ROTATION: Real = core::f64::consts::FRAC_PI_4;
+
+/// The velocities `(linvel, angvel)` of body `b` as rapier integrates them in a step of `h`:
+/// its linear speed capped at `IntegrationParameters::max_linear_velocity` (400 lengths of
+/// `length_unit` per second by default), its turn at [`RAPIER_MAX_ROTATION`] per step unless
+/// the body allows fast rotation. Rapier moves the body with them and keeps them after the
+/// step.
+fn capped(
+    world: &PhysicsWorld,
+    b: RigidBodyHandle,
+    (linvel, angvel): (Vector, Vector),
+    h: Real,
+) -> (Vector, Vector) {
+    let max_linear = real(world.integration_parameters.max_linear_velocity());
+    let linvel = match linvel.length() {
+        speed if speed > max_linear => linvel * (max_linear / speed),
+        _ => linvel,
+    };
+    let fast = world.bodies.get(b).is_some_and(|rb| rb.is_fast_rotation_allowed());
+    let max_angular = RAPIER_MAX_ROTATION / h;
+    let angvel = match angvel.length() {
+        rate if !fast && rate > max_angular => angvel * (max_angular / rate),
+        _ => angvel,
+    };
+    (linvel, angvel)
+}
+
 /// The impulses (linear, angular) of the bodies a group's sub-steps held where they were.
 type Held = Vec<(RigidBodyHandle, (Vector, Vector))>;
 
@@ -206,10 +235,12 @@ impl DiscreteContacts {
                 let e = added.entry(m.handle).or_insert((Vector::ZERO, Vector::ZERO));
                 e.0 += m.impulse.0 / h;
                 e.1 += m.impulse.1 / h;
-                // Back by one step of its end velocities from where its sub-steps took it.
+                // Back by one step of its end velocities, as rapier will integrate them, from
+                // where its sub-steps took it.
+                let (linvel, angvel) = capped(world, m.handle, (m.linvel, m.angvel), h);
                 let start = Moving {
-                    centre: m.centre - m.linvel * h,
-                    rotation: (Rotation::from_scaled_axis(-m.angvel * h) * m.rotation).normalize(),
+                    centre: m.centre - linvel * h,
+                    rotation: (Rotation::from_scaled_axis(-angvel * h) * m.rotation).normalize(),
                     ..m
                 };
                 placed.push((start.handle, start.pose()));
