@@ -779,3 +779,37 @@ fn an_impact_past_rapiers_speed_cap_never_passes_through() {
         assert!((u / cap - 1.0).abs() < 1e-9, "leaving at {u} m/s, rapier's cap {cap}");
     }
 }
+
+/// A body added mid-run and handed over comes to rest on the floor from its next step, and
+/// the step's statistics stay whole (the candidate search, started afresh for the new handled
+/// set, keeps counting its builds).
+#[test]
+fn a_body_added_mid_run_is_handled_from_its_next_step() {
+    let v = discrete_contact::math::Vector::new;
+    let mut world = PhysicsWorld::new();
+    world.integration_parameters.dt = 1.0 / 60.0;
+    let floor = world.insert_body(RigidBodyBuilder::fixed());
+    world.insert_collider(ColliderBuilder::cuboid(1.0, 0.1, 1.0), Some(floor));
+    // Dropped: its fall rebuilds the candidate search's list many times before the addition.
+    let first = world.insert_body(RigidBodyBuilder::dynamic().translation(v(-0.3, 0.5, 0.0)));
+    world.insert_collider(ColliderBuilder::cuboid(0.05, 0.05, 0.05), Some(first));
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+            .unwrap();
+    let plastic = Material::new(1e8, 0.3).unwrap();
+    contacts.handle_all(&mut world, plastic).unwrap();
+    for _ in 0..60 {
+        contacts.step(&mut world).unwrap();
+    }
+    let added = world.insert_body(RigidBodyBuilder::dynamic().translation(v(0.3, 0.15, 0.0)));
+    let collider = world.insert_collider(ColliderBuilder::cuboid(0.05, 0.05, 0.05), Some(added));
+    contacts.handle(&mut world, collider, plastic).unwrap();
+    for _ in 0..120 {
+        let stats = contacts.step(&mut world).unwrap();
+        assert!(stats.neighbour_builds < 10, "{} builds in one step", stats.neighbour_builds);
+    }
+    for b in [first, added] {
+        let y = world.bodies[b].translation().y;
+        assert!((y - 0.15).abs() < 1e-5, "a box at {y} m, not resting on the floor");
+    }
+}

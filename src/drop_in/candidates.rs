@@ -125,7 +125,7 @@ impl DiscreteContacts {
             let bounded = |c: &ColliderHandle| self.handled[c].radius.is_finite();
             n.bounded = n.all.iter().copied().filter(bounded).collect();
             n.half_spaces = n.all.iter().copied().filter(|c| !bounded(c)).collect();
-            n.list = NeighbourList::default();
+            n.list.restart();
             n.generation = Some(self.generation);
         }
         guard

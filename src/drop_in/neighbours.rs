@@ -58,9 +58,15 @@ impl NeighbourList {
         Ok(())
     }
 
-    /// How many times the list has been built.
+    /// How many times the list has been built (its predecessors' builds included, see
+    /// [`restart`](Self::restart)).
     pub(crate) fn builds(&self) -> usize {
         self.builds
+    }
+
+    /// Forgets the list, for other spheres, keeping the count of builds.
+    pub(crate) fn restart(&mut self) {
+        *self = Self { builds: self.builds, ..Self::default() };
     }
 
     /// Whether every sphere is still within `skin/2` of its anchor, its reach included.
