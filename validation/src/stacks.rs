@@ -207,18 +207,8 @@ fn built(scene: Scene) -> Built {
             let mut w = world(1.0 / 60.0, 2.0 * r);
             ground(&mut w, inner + 2.0 * wall);
             let walls = w.insert_body(RigidBodyBuilder::fixed());
-            for (x, z, hx, hz) in [
-                (inner + wall, 0.0, wall, inner + 2.0 * wall),
-                (-inner - wall, 0.0, wall, inner + 2.0 * wall),
-                (0.0, inner + wall, inner, wall),
-                (0.0, -inner - wall, inner, wall),
-            ] {
-                w.insert_collider(
-                    ColliderBuilder::cuboid(hx, height, hz)
-                        .translation(Vector::new(x, height, z))
-                        .friction(RAPIER_FRICTION),
-                    Some(walls),
-                );
+            for side in crate::drop_in::bin_walls(inner, wall, height) {
+                w.insert_collider(side.friction(RAPIER_FRICTION), Some(walls));
             }
             // A grid of 8 × 8 per layer, 2.4 r apart, starting a radius above the floor.
             let per_row = 8;

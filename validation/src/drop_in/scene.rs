@@ -52,6 +52,26 @@ pub struct BinScene {
     pub half_width: f64,
 }
 
+/// The four cuboid walls of a square bin about the vertical axis through the origin: inner
+/// faces `half_width` from it (m), `thickness` thick, standing on `y = 0` to `2 height`, the
+/// corners closed.
+pub fn bin_walls(half_width: f64, thickness: f64, height: f64) -> [ColliderBuilder; 4] {
+    let (w, t) = (half_width, thickness);
+    [
+        (w + t, 0.0, t, w + 2.0 * t),
+        (-w - t, 0.0, t, w + 2.0 * t),
+        (0.0, w + t, w, t),
+        (0.0, -w - t, w, t),
+    ]
+    .map(|(x, z, hx, hz)| {
+        ColliderBuilder::cuboid(hx as Real, height as Real, hz as Real).translation(Vector::new(
+            x as Real,
+            height as Real,
+            z as Real,
+        ))
+    })
+}
+
 /// A bin with `n` falling bodies, columns of six by six per layer, shapes cycling through
 /// sphere, cylinder, cube and polyhedron, each slightly turned (deterministic).
 pub fn bin_scene(n: usize) -> BinScene {
@@ -74,18 +94,8 @@ pub fn bin_scene(n: usize) -> BinScene {
         rapier_material(ColliderBuilder::new(SharedShape::halfspace(Vector::Y))),
         Some(bin),
     );
-    let (t, h): (f64, f64) = (0.01, 0.3);
-    for (x, z, hx, hz) in [
-        (half_width + t, 0.0, t, half_width + 2.0 * t),
-        (-half_width - t, 0.0, t, half_width + 2.0 * t),
-        (0.0, half_width + t, half_width, t),
-        (0.0, -half_width - t, half_width, t),
-    ] {
-        world.insert_collider(
-            rapier_material(ColliderBuilder::cuboid(hx as Real, h as Real, hz as Real))
-                .translation(v(x, h, z)),
-            Some(bin),
-        );
+    for wall in bin_walls(half_width, 0.01, 0.3) {
+        world.insert_collider(rapier_material(wall), Some(bin));
     }
 
     // The see-saw: a plank hinged about z at its middle, above the floor.
