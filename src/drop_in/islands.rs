@@ -188,24 +188,12 @@ impl DiscreteContacts {
         h: Real,
         rest_speed: Real,
     ) -> Approach {
-        match self.probe_law(params, a, b, h, rest_speed) {
-            Some(Ok(law)) => Approach::Resting(law),
-            Some(Err(())) => Approach::Impact,
-            None => Approach::Apart,
-        }
-    }
-
-    /// [`approaching_law`](Self::approaching_law): `None` apart, `Some(Err(()))` an impact.
-    fn probe_law(
-        &self,
-        params: &PairParameters,
-        a: &Side<'_>,
-        b: &Side<'_>,
-        h: Real,
-        rest_speed: Real,
-    ) -> Option<std::result::Result<StepLaw, ()>> {
         let reach = a.travel(h) + b.travel(h);
-        let c = film_contact((a.handled, &a.pose, a.shape), (b.handled, &b.pose, b.shape), reach)?;
+        let Some(c) =
+            film_contact((a.handled, &a.pose, a.shape), (b.handled, &b.pose, b.shape), reach)
+        else {
+            return Approach::Apart;
+        };
         let gap = c.dist.max(0.0);
         let x = 0.5 * (c.point1 + c.point2);
         let smaller = a.handled.half_size.min(b.handled.half_size);
@@ -223,7 +211,7 @@ impl DiscreteContacts {
         // pair touching may be pressed together by the bodies it rests on or that rest on it,
         // which its own motion does not show. Meeting at the rest speed or faster, it is an
         // impact.
-        let n = directions.into_iter().flatten().next()?;
+        let Some(n) = directions.into_iter().flatten().next() else { return Approach::Apart };
         let (approach, end_speed) = closing(n);
         let touching = gap <= TOUCHING * smaller;
         if !(h * end_speed > gap || touching) {
@@ -242,10 +230,10 @@ impl DiscreteContacts {
                 + rim(a)
                 + rim(b)
                 + h * (a.acceleration - b.acceleration).length();
-            return (bound >= rest_speed).then_some(Err(()));
+            return if bound >= rest_speed { Approach::Impact } else { Approach::Apart };
         }
         if end_speed.max(approach) >= rest_speed {
-            return Some(Err(()));
+            return Approach::Impact;
         }
         let probe_along = |n: Vector| {
             let (_, end) = closing(n);
@@ -265,7 +253,9 @@ impl DiscreteContacts {
             .filter(|g| g.indentation > 0.0 && g.volume > 0.0)
             .map(|g| (g, shift))
         };
-        let (g, shift) = directions.into_iter().flatten().find_map(probe_along)?;
+        let Some((g, shift)) = directions.into_iter().flatten().find_map(probe_along) else {
+            return Approach::Apart;
+        };
         // Its point placed as a live contact's is: through a ball's centre, in the plane of a
         // body of revolution's axis.
         let moved = Pose::from_parts(a.pose.translation + shift, a.pose.rotation);
@@ -276,7 +266,7 @@ impl DiscreteContacts {
         );
         let f_el = elastic_force(params, &g);
         if !(f_el > 0.0) {
-            return None;
+            return Approach::Apart;
         }
         let q =
             0.5 * (1.0 + volume_exponent(g.volume, g.indentation, g.surface_area).clamp(1.0, 2.0));
@@ -294,7 +284,7 @@ impl DiscreteContacts {
             let turn = Matrix::from_quat(b.pose.rotation);
             (turn * frame.rocking * turn.transpose(), rocking_damping_rate(damping, f_el, &g))
         };
-        Some(Ok(StepLaw {
+        Approach::Resting(StepLaw {
             bodies: [None, None],
             given: [
                 (a.kinematics.linvel, a.kinematics.angvel),
@@ -312,7 +302,7 @@ impl DiscreteContacts {
             spring: self.spring_law(params, k_n, damping, f_el, 0.0, (Vector::ZERO, false), h),
             rocking,
             rocking_damping,
-        }))
+        })
     }
 
     /// Solves the islands the `resting` contacts join over a sub-step of `h`, each body as
