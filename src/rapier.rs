@@ -15,9 +15,10 @@
 //! `filter_contact_pair` hook on colliders that asked for it before they were handed over.
 //! Handled pairs report rapier's collision events themselves (`Started` and `Stopped`, a
 //! removed collider's with `REMOVED`, through [`DiscreteContacts::step_with_events`], without
-//! a `ContactPair`, which only rapier can build); they report no contact-force events. What
-//! each live contact carried over the last step — point, normal, indentation, force — is read
-//! from [`DiscreteContacts::contacts`]. Bodies and colliders may be removed between steps:
+//! a `ContactPair`, which only rapier can build); their contact-force events are read after
+//! the step from [`DiscreteContacts::contact_force_events`], and what each live contact
+//! carried over the last step — point, normal, indentation, force — from
+//! [`DiscreteContacts::contacts`]. Bodies and colliders may be removed between steps:
 //! their contacts end at the next step.
 //!
 //! **Small bodies**: rapier sizes its broad-phase margins by

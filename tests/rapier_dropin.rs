@@ -813,3 +813,59 @@ fn a_body_added_mid_run_is_handled_from_its_next_step() {
         assert!((y - 0.15).abs() < 1e-5, "a box at {y} m, not resting on the floor");
     }
 }
+
+/// Contact-force events of handled pairs, read after the step: two balls meeting head-on in
+/// less than a step report one event, in that step, whose force is the impulse each ball
+/// took over the step (`m Δv / dt`, within 1e-6) — though the contact ended within the step;
+/// above the collider's threshold only, and only where a collider asks for such events.
+#[test]
+fn contact_force_events_carry_the_impulse_of_the_step() {
+    let v = discrete_contact::math::Vector::new;
+    for (threshold, active) in [
+        (0.0, ActiveEvents::CONTACT_FORCE_EVENTS),
+        (1e9, ActiveEvents::CONTACT_FORCE_EVENTS),
+        (0.0, ActiveEvents::empty()),
+    ] {
+        let mut world = PhysicsWorld::new();
+        world.gravity = v(0.0, 0.0, 0.0);
+        world.integration_parameters.dt = 1.0 / 60.0;
+        let mut balls = Vec::new();
+        for side in [-1.0, 1.0] {
+            let b = world.insert_body(
+                RigidBodyBuilder::dynamic().translation(v(side * 0.02, 0.0, 0.0)).linvel(v(
+                    -side * 1.0,
+                    0.0,
+                    0.0,
+                )),
+            );
+            let c = ColliderBuilder::ball(0.01).density(7800.0);
+            let c = if side > 0.0 {
+                c.active_events(active).contact_force_event_threshold(threshold)
+            } else {
+                c
+            };
+            world.insert_collider(c, Some(b));
+            balls.push(b);
+        }
+        let mut contacts =
+            DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.9)
+                .unwrap();
+        contacts.handle_all(&mut world, Material::new(2e11, 0.3).unwrap()).unwrap();
+        let mut events = Vec::new();
+        for step in 0..10 {
+            let before = world.bodies[balls[1]].linvel();
+            contacts.step(&mut world).unwrap();
+            let taken = world.bodies[balls[1]].mass() * (world.bodies[balls[1]].linvel() - before);
+            for e in contacts.contact_force_events(&world) {
+                assert!(!e.touching, "the impact outlived its step");
+                let force = e.force_on_a.length();
+                let expected = taken.length() / world.integration_parameters.dt;
+                assert!((force / expected - 1.0).abs() < 1e-6, "{force} N against {expected} N");
+                events.push(step);
+            }
+        }
+        let expected = usize::from(threshold == 0.0 && !active.is_empty());
+        assert_eq!(events.len(), expected, "threshold {threshold}, {active:?}: {events:?}");
+        assert!(world.bodies[balls[1]].linvel().x > 0.8, "no rebound");
+    }
+}

@@ -26,6 +26,10 @@ pub struct ContactReading {
     pub force_on_a: Vector,
     /// Whether its tangential spring is sliding (at the friction limit) at the step's end.
     pub sliding: bool,
+    /// Whether the contact is live at the step's end; `false` for one that ended within the
+    /// step (an impact shorter than the step), listed by
+    /// [`contact_force_events`](DiscreteContacts::contact_force_events) only.
+    pub touching: bool,
 }
 
 impl ContactReading {
@@ -76,12 +80,12 @@ impl DiscreteContacts {
         }
     }
 
-    /// Makes the attempt's records the readings of a step of `dt` that passed: the pairs live
-    /// now, in the order of their colliders' handles.
+    /// Makes the attempt's records the readings of a step of `dt` that passed, in the order
+    /// of their colliders' handles.
     pub(super) fn keep_readings(&mut self, dt: Real) {
         self.readings.clear();
         for (&pair, r) in &self.step_readings {
-            let Some(state) = self.states.get(&pair) else { continue };
+            let state = self.states.get(&pair);
             self.readings.push(ContactReading {
                 colliders: pair,
                 point: r.point,
@@ -89,7 +93,8 @@ impl DiscreteContacts {
                 volume: r.volume,
                 indentation: r.indentation,
                 force_on_a: r.impulse_on_a / dt,
-                sliding: state.tangential.sliding,
+                sliding: state.is_some_and(|s| s.tangential.sliding),
+                touching: state.is_some(),
             });
         }
         self.readings
@@ -100,11 +105,33 @@ impl DiscreteContacts {
     /// The live contacts after the last step, in the order of their colliders' handles (empty
     /// before the first step and after a restart).
     pub fn contacts(&self) -> impl Iterator<Item = &ContactReading> {
-        self.readings.iter()
+        self.readings.iter().filter(|r| r.touching)
     }
 
     /// The live contacts of `collider` after the last step, as A or as B.
     pub fn contacts_with(&self, collider: ColliderHandle) -> impl Iterator<Item = &ContactReading> {
-        self.readings.iter().filter(move |r| r.colliders.0 == collider || r.colliders.1 == collider)
+        self.contacts().filter(move |r| r.colliders.0 == collider || r.colliders.1 == collider)
+    }
+
+    /// The last step's contact-force events, as rapier would report them for its own contacts:
+    /// each contact of the step (live or ended within it) whose mean force over the step is
+    /// larger than the contact-force threshold of one of its colliders that asks for such
+    /// events (`ActiveEvents::CONTACT_FORCE_EVENTS`, `Collider::contact_force_event_threshold`);
+    /// its magnitude is rapier's `total_force_magnitude`. Rapier's own handler cannot be given
+    /// them (its `ContactPair` is built by rapier alone), so they are read here after the step.
+    pub fn contact_force_events<'a>(
+        &'a self,
+        world: &'a PhysicsWorld,
+    ) -> impl Iterator<Item = &'a ContactReading> {
+        let threshold = move |c: ColliderHandle| {
+            world
+                .colliders
+                .get(c)
+                .filter(|co| co.active_events().contains(ActiveEvents::CONTACT_FORCE_EVENTS))
+                .map_or(Real::INFINITY, |co| real(co.contact_force_event_threshold()))
+        };
+        self.readings.iter().filter(move |r| {
+            r.force_on_a.length() > threshold(r.colliders.0).min(threshold(r.colliders.1))
+        })
     }
 }
