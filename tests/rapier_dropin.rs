@@ -869,3 +869,45 @@ fn contact_force_events_carry_the_impulse_of_the_step() {
         assert!(world.bodies[balls[1]].linvel().x > 0.8, "no rebound");
     }
 }
+
+/// A box resting on the floor given back to rapier mid-run: its discrete contact ends (its
+/// collision event's end reported at the next step), rapier's own contact takes it over and
+/// it keeps resting; a collider never handled is not given back.
+#[test]
+fn a_collider_given_back_rests_on_rapiers_own_contact() {
+    let v = discrete_contact::math::Vector::new;
+    let mut world = PhysicsWorld::new();
+    world.integration_parameters.dt = 1.0 / 60.0;
+    let floor = world.insert_body(RigidBodyBuilder::fixed());
+    world.insert_collider(ColliderBuilder::cuboid(1.0, 0.1, 1.0), Some(floor));
+    let b = world.insert_body(RigidBodyBuilder::dynamic().translation(v(0.0, 0.15, 0.0)));
+    let boxed = world.insert_collider(
+        ColliderBuilder::cuboid(0.05, 0.05, 0.05).active_events(ActiveEvents::COLLISION_EVENTS),
+        Some(b),
+    );
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+            .unwrap();
+    contacts.handle_all(&mut world, Material::new(1e8, 0.3).unwrap()).unwrap();
+    let collector = Collisions::default();
+    for _ in 0..30 {
+        contacts.step_with_events(&mut world, &(), &collector).unwrap();
+    }
+    assert_eq!(contacts.contact_count(), 1);
+    assert!(contacts.unhandle(&mut world, boxed));
+    assert!(!contacts.unhandle(&mut world, boxed), "given back twice");
+    assert_eq!(contacts.contact_count(), 0);
+    for _ in 0..60 {
+        contacts.step_with_events(&mut world, &(), &collector).unwrap();
+    }
+    assert_eq!(contacts.contacts().count(), 0);
+    assert!(
+        world.narrow_phase.contact_pairs().any(|p| p.has_any_active_contact()),
+        "rapier's own contact"
+    );
+    let y = world.bodies[b].translation().y;
+    assert!((y - 0.15).abs() < 2e-3, "the box at {y} m");
+    let events: Vec<CollisionEvent> = collector.0.lock().unwrap().clone();
+    assert!(events.first().is_some_and(|e| e.started()), "{events:?}");
+    assert!(events.iter().any(|e| e.stopped()), "no end of the discrete contact: {events:?}");
+}

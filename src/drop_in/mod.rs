@@ -515,6 +515,46 @@ impl DiscreteContacts {
         Ok(())
     }
 
+    /// Gives `collider` back to rapier's own contacts: its live contacts with the discrete
+    /// contact end (the ends of those reported as started go out as collision events at the
+    /// next step), and its contact-pair hook flag is as the user had it before it was handed
+    /// over. `false` where it was not handled. A collider whose shape changed is handed over
+    /// again with [`handle`](Self::handle) (the contact keeps the shape it was given).
+    pub fn unhandle(&mut self, world: &mut PhysicsWorld, collider: ColliderHandle) -> bool {
+        let Some(h) = self.forget(&[collider]).pop() else { return false };
+        if let Some(co) = world.colliders.get_mut(collider) {
+            if !h.user_filter {
+                co.set_active_hooks(co.active_hooks() - ActiveHooks::FILTER_CONTACT_PAIRS);
+            }
+        }
+        true
+    }
+
+    /// Forgets the handled colliders among `colliders` and ends their contacts; returns what
+    /// was kept of those that were handled.
+    fn forget(&mut self, colliders: &[ColliderHandle]) -> Vec<Handled> {
+        let forgotten: Vec<Handled> = colliders
+            .iter()
+            .filter_map(|c| {
+                self.queries.remove(c);
+                self.set_aside.remove(c);
+                self.handled.remove(c)
+            })
+            .collect();
+        if forgotten.is_empty() {
+            return forgotten;
+        }
+        let kept = |(a, b): &(ColliderHandle, ColliderHandle)| {
+            !colliders.contains(a) && !colliders.contains(b)
+        };
+        self.states.retain(|pair, _| kept(pair));
+        self.gaps.retain(|pair, _| kept(pair));
+        self.impacts.retain(|pair, _| kept(pair));
+        self.elastic.retain(|pair, _| kept(pair));
+        self.generation += 1;
+        forgotten
+    }
+
     /// A collider's shape as f64 parry sees it and as the contact's SDF; an error for a shape
     /// that is not a convex solid.
     fn shapes_of(co: &Collider) -> Result<(SharedShape, ConvexShape)> {
@@ -588,18 +628,7 @@ impl DiscreteContacts {
             return;
         }
         self.report_removed(world, &gone, events);
-        for c in &gone {
-            self.handled.remove(c);
-            self.queries.remove(c);
-            self.set_aside.remove(c);
-        }
-        let kept =
-            |(a, b): &(ColliderHandle, ColliderHandle)| !gone.contains(a) && !gone.contains(b);
-        self.states.retain(|pair, _| kept(pair));
-        self.gaps.retain(|pair, _| kept(pair));
-        self.impacts.retain(|pair, _| kept(pair));
-        self.elastic.retain(|pair, _| kept(pair));
-        self.generation += 1;
+        self.forget(&gone);
     }
 
     /// Builds the missing query shapes of handled colliders (all of them after a restart).
