@@ -13,14 +13,6 @@
 
 use super::*;
 
-/// A pair of colliders as the contacts' map keys it.
-pub(super) type Pair = (ColliderHandle, ColliderHandle);
-
-/// The order events go out in: by the colliders' handles.
-fn order(pair: &Pair) -> ((u32, u32), (u32, u32)) {
-    (pair.0.into_raw_parts(), pair.1.into_raw_parts())
-}
-
 impl DiscreteContacts {
     /// Reports the step's collision events to `events` (see the module): `touched` holds every
     /// pair with a live contact at some point of the step.
@@ -32,7 +24,7 @@ impl DiscreteContacts {
             .chain(self.reported.iter())
             .copied()
             .collect();
-        pairs.sort_by_key(order);
+        pairs.sort_by_key(pair_order);
         pairs.dedup();
         let wants = |c: ColliderHandle| {
             world
@@ -74,7 +66,7 @@ impl DiscreteContacts {
             .filter(|(a, b)| gone.contains(a) || gone.contains(b))
             .copied()
             .collect();
-        ended.sort_by_key(order);
+        ended.sort_by_key(pair_order);
         for (a, b) in ended {
             self.reported.remove(&(a, b));
             let event = CollisionEvent::Stopped(a, b, CollisionEventFlags::REMOVED);

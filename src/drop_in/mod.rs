@@ -52,6 +52,14 @@ pub use verify::{FailedStep, ENERGY_TOLERANCE, REST_FRACTION};
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::FixedState>;
 type HashSet<K> = std::collections::HashSet<K, foldhash::fast::FixedState>;
 
+/// A pair of colliders as the contacts' maps key it.
+type Pair = (ColliderHandle, ColliderHandle);
+
+/// The order in which pairs are listed wherever the order shows: by their colliders' handles.
+fn pair_order(pair: &Pair) -> ((u32, u32), (u32, u32)) {
+    (pair.0.into_raw_parts(), pair.1.into_raw_parts())
+}
+
 /// A handled collider: its SDF and material.
 #[derive(Clone, Debug)]
 #[cfg_attr(feature = "checkpoint", derive(serde::Serialize, serde::Deserialize))]

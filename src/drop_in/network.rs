@@ -221,7 +221,7 @@ pub(super) fn highest_frequency(
 fn assemble(contacts: &DiscreteContacts, world: &PhysicsWorld, spring: bool) -> Option<Network> {
     let mut keys: Vec<_> =
         contacts.states.iter().filter(|(_, s)| s.normal_stiffness > 0.0).map(|(k, _)| *k).collect();
-    keys.sort_by_key(|(a, b)| (a.into_raw_parts(), b.into_raw_parts()));
+    keys.sort_by_key(pair_order);
     let mut index: HashMap<RigidBodyHandle, usize> = HashMap::default();
     let mut bodies: Vec<Body> = Vec::new();
     let mut springs = Vec::with_capacity(keys.len());

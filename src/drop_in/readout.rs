@@ -3,7 +3,6 @@
 //! loads and stress tensors.
 
 use super::*;
-use events::Pair;
 
 /// A live contact after the last step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -97,8 +96,7 @@ impl DiscreteContacts {
                 touching: state.is_some(),
             });
         }
-        self.readings
-            .sort_by_key(|r| (r.colliders.0.into_raw_parts(), r.colliders.1.into_raw_parts()));
+        self.readings.sort_by_key(|r| pair_order(&r.colliders));
         self.step_readings.clear();
     }
 

@@ -259,9 +259,6 @@ impl DiscreteContacts {
     }
 }
 
-/// A pair, named only where an error reports it.
-type Pair = (ColliderHandle, ColliderHandle);
-
 /// What a step's pairs ask of its sub-steps.
 #[derive(Default)]
 pub(super) struct Limits {
