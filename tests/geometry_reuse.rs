@@ -770,3 +770,38 @@ fn a_lens_is_updated_by_its_exact_law() {
         assert!(worst <= 0.03, "{name}: force off by {worst:.3e}");
     }
 }
+
+/// A ball rolling 1 cm per evaluation (0.2 rad: 60 Hz at 0.6 m/s, radius 5 cm) on a floor whose
+/// SDF gives loose bounds, so that the overlap's grid lies in the ball's turning frame, where
+/// the contact travels across the last box by more than its width: every evaluation finds the
+/// whole cap, its volume within 6 % of the floor as a half-space gives it (the `N_c` = 4 grid
+/// of a cap tilted against its axes; 5 % measured), never a sliver of the cap left in the last
+/// box (before: 0.8 % of the volume every other evaluation).
+#[test]
+fn a_rolling_balls_contact_is_found_whole_in_the_balls_turning_frame() {
+    let ball = ConvexShape::ball(0.05).unwrap();
+    let plane = ConvexShape::half_space(Vector::Y).unwrap();
+    let loose = discrete_contact::parry3d_f64::bounding_volume::Aabb::new(
+        Vector::splat(-1.5),
+        Vector::splat(1.5),
+    );
+    let slab = ConvexShape::custom(|p: Vector| (p.y + 0.1).abs() - 0.1, loose).unwrap();
+    let m = Material::new(1e7, 0.3).unwrap();
+    let model = ContactModel::new(
+        PairParameters::new(&m, &m, 0.5).unwrap(),
+        settings(4, IntegrationMode::Subcell),
+    );
+    let (mut on_plane, mut on_slab) = (None, None);
+    for k in 0..12 {
+        let turn = Vector::new(1.2, 0.0, -12.0) * (k as f64 / 60.0);
+        let centre = Vector::new(-0.44 + 0.01 * k as f64, 0.04978, 0.014 + 0.001 * k as f64);
+        let pose = Pose::from_parts(centre, Rotation::from_scaled_axis(turn));
+        let volume = |floor: &ConvexShape, state: &mut Option<ContactState>| {
+            let (a, b) =
+                (BodyState::at_rest(&ball, pose), BodyState::at_rest(floor, Pose::IDENTITY));
+            model.evaluate(&a, &b, state).unwrap().expect("in contact").geometry.volume
+        };
+        let (exact, found) = (volume(&plane, &mut on_plane), volume(&slab, &mut on_slab));
+        assert!((found / exact - 1.0).abs() < 0.06, "evaluation {k}: {found:e} against {exact:e}");
+    }
+}

@@ -103,7 +103,14 @@ pub(super) fn follow<A: Sdf + ?Sized, B: Sdf + ?Sized>(
 }
 
 /// The overlap on `grid`, or `None` where it `reaches` the grid's boundary (as the nodes'
-/// distances tell) or holds no piece.
+/// distances tell), or holds no piece, or holds no node in both bodies while its pieces reach
+/// a face of the grid.
+///
+/// The nodes miss an overlap that moved past the box (a rolling body's contact travels across
+/// its frame) and crosses the boundary through the inside of a cell's face, between the nodes
+/// and edges the boundary test sees, leaving only a sliver of itself on the grid. Such a
+/// sliver holds no node and its pieces end on the grid's face; an overlap the box holds has
+/// its inner nodes in both bodies, or (too thin for any node) pieces inside the box.
 pub(super) fn within<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     pair: &Pair<'_, A, B>,
     grid: &Grid,
@@ -116,7 +123,16 @@ pub(super) fn within<A: Sdf + ?Sized, B: Sdf + ?Sized>(
     }
     let integral = subcell::integrate(pair, grid, &values);
     let pieces = integral.bounds?;
+    if !values.iter().any(|&v| in_both(v)) && reaches_a_face(&pieces, grid) {
+        return None;
+    }
     finish(pair, integral, grid, rough, pieces)
+}
+
+/// Whether `pieces` — the box of an integral's pieces — reaches a face of `grid`'s box.
+fn reaches_a_face(pieces: &Aabb, grid: &Grid) -> bool {
+    let (b, slack) = (grid.bounds(), grid.h * 1e-9);
+    (pieces.mins - b.mins).cmple(slack).any() || (b.maxs - pieces.maxs).cmple(slack).any()
 }
 
 /// Whether the overlap reaches the grid's boundary, as its nodes' distances (`values`) tell: a
