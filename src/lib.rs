@@ -69,8 +69,9 @@
 //! - [`Error::InvalidArgument`] — an argument that is not a number and not what the call
 //!   accepts (a collider handle of another world, a collider without a dynamic body for the
 //!   fluid, contacts whose periodic box is not the fluid's, a saved run of another case).
-//! - [`Error::UnsupportedShape`] — a parry shape with no convex SDF (meshes, compounds,
-//!   height fields); decompose it into convex pieces or pass a custom SDF.
+//! - [`Error::UnsupportedShape`] — a parry shape with no convex SDF (compounds, polylines;
+//!   meshes and height fields outside the drop-in's walls), or a mesh with no solid side;
+//!   decompose it into convex pieces or pass a custom SDF.
 //! - [`Error::NonFinite`] — a NaN/infinite pose, velocity or vertex; usually a blown-up
 //!   simulation upstream: reduce the time step.
 //! - [`Error::UnboundedOverlap`] — both bodies unbounded (two half-spaces); such a pair has no
@@ -177,7 +178,7 @@ pub use material::{
     Friction, Material, PairParameters, StiffnessFactor,
 };
 pub use overlap::{compute_overlap, IntegrationMode, OverlapGeometry, OverlapSettings};
-pub use shape::{ConvexShape, Sdf};
+pub use shape::{ConvexShape, MeshSdf, Sdf};
 pub use tangential::TangentialLaw;
 
 /// The math types of parry/rapier (f64): `Real`, `Vector` (glam `DVec3`), `Pose`, `Rotation`.

@@ -528,6 +528,16 @@ impl DiscreteContacts {
             }
             return Ok((None, GapCheck::Closed, film));
         };
+        // A pair found touching with an overlap no coordinate resolves (bodies set down
+        // exactly touching, round-off putting a sliver of a node in both): no law can be
+        // taken from it, and the resting law's stiffness there is nil, so the bodies would
+        // meet through a whole sub-step. It is a pair about to touch.
+        let resolved = PRECISION_SPACINGS
+            * coordinate_spacing(out.geometry.contact_point.abs().max_element(), Real::EPSILON);
+        if implicit && !live && !(out.geometry.indentation > resolved) {
+            *slot = None;
+            return approaching(film);
+        }
         let f = out.force;
         let state = slot.as_deref().expect("a live contact has a state");
         // Under implicit integration a contact that begins at the rest speed or faster is an

@@ -623,21 +623,21 @@ pub(super) fn moves_in_islands(world: &PhysicsWorld, b: RigidBodyHandle) -> bool
 }
 
 impl Side<'_> {
-    /// The direction from `other`'s centre to this collider's (m; a half-space's normal, out
-    /// of it); `None` for two half-spaces.
+    /// The direction from `other`'s centre to this collider's (m; a wall's normal, out of it,
+    /// where one of them is a wall); `None` for two walls.
     fn towards(&self, other: &Side<'_>) -> Option<Vector> {
-        let half_space = |s: &Side<'_>| match s.handled.shape {
-            ConvexShape::HalfSpace { normal } => Some(s.pose.rotation * normal),
-            _ => None,
-        };
-        match (half_space(self), half_space(other)) {
+        let (here, there) = (
+            self.pose.transform_point(self.handled.centre),
+            other.pose.transform_point(other.handled.centre),
+        );
+        match (
+            self.handled.wall_normal(&self.pose, there),
+            other.handled.wall_normal(&other.pose, here),
+        ) {
             (Some(_), Some(_)) => None,
             (Some(n), None) => Some(-n),
             (None, Some(n)) => Some(n),
-            (None, None) => Some(
-                self.pose.transform_point(self.handled.centre)
-                    - other.pose.transform_point(other.handled.centre),
-            ),
+            (None, None) => Some(here - there),
         }
     }
 

@@ -21,7 +21,7 @@ use super::{boundary, engine};
 use engine::prelude::{
     ActiveCollisionTypes, ActiveEvents, ActiveHooks, Collider, ColliderHandle, CollisionEvent,
     CollisionEventFlags, ContactModificationContext, EventHandler, PairFilterContext, PhysicsHooks,
-    PhysicsWorld, RigidBodyHandle, RigidBodyType, SolverFlags,
+    PhysicsWorld, RigidBodyHandle, RigidBodySet, RigidBodyType, SolverFlags,
 };
 use std::ops::Bound::{Excluded, Included};
 
@@ -36,7 +36,7 @@ use crate::material::{
 use crate::math::{Pose, Real, Vector};
 use crate::overlap::OverlapSettings;
 use crate::periodic::{PeriodicBox, Sphere};
-use crate::shape::{ConvexShape, Sdf};
+use crate::shape::{ConvexShape, MeshSdf, Sdf};
 use crate::substep::coordinate_spacing;
 pub use crate::substep::{
     Integration, StepPolicy, StepStats, AT_REST_SPEED, IMPACT_WINDOW, MIN_SUBSTEPS_PER_CONTACT,
@@ -44,7 +44,7 @@ pub use crate::substep::{
 };
 use crate::tangential::{stiffness_ratio, TangentialLaw};
 use neighbours::NeighbourList;
-use parry3d_f64::shape::SharedShape;
+use parry3d_f64::shape::{SharedShape, TypedShape};
 pub use readout::ContactReading;
 pub use verify::{FailedStep, ENERGY_TOLERANCE, REST_FRACTION};
 
@@ -80,6 +80,18 @@ struct Handled {
 }
 
 impl Handled {
+    /// A wall's outward unit normal (world) where it is nearest the world point `at`: a
+    /// half-space's own, a mesh's gradient there; `None` for a body that is not a wall.
+    fn wall_normal(&self, pose: &Pose, at: Vector) -> Option<Vector> {
+        match &self.shape {
+            ConvexShape::HalfSpace { normal } => Some(pose.rotation * *normal),
+            ConvexShape::Mesh(m) => {
+                Some(pose.rotation * m.gradient(pose.inverse_transform_point(at)))
+            }
+            _ => None,
+        }
+    }
+
     /// The largest reduced radius of curvature `R*` (m) the liquid film between this collider
     /// and `other` can act with ([`film_radius`](crate::lubrication::film_radius) of each, the
     /// bound of the radius at the gap): for the sub-step advice.
@@ -507,7 +519,13 @@ impl DiscreteContacts {
         Ok(self)
     }
 
-    /// Hands `collider` to the discrete contact (its shape must be convex) with `material`.
+    /// Hands `collider` to the discrete contact with `material`: a convex solid, or a triangle
+    /// mesh or height field on a fixed or kinematic body as a wall (its solid side,
+    /// [`MeshSdf`]).
+    ///
+    /// Errors: [`Error::InvalidArgument`] for a handle not in `world`;
+    /// [`Error::UnsupportedShape`] for a shape that is neither (a compound, a polyline), a
+    /// mesh on a dynamic body, or a mesh whose triangles have no solid side.
     pub fn handle(
         &mut self,
         world: &mut PhysicsWorld,
@@ -518,9 +536,14 @@ impl DiscreteContacts {
             name: "collider",
             allowed: "a handle of a collider in this world",
         })?;
-        let shapes = Self::shapes_of(co)?;
+        let shapes = Self::shapes_of(&world.bodies, co)?;
         self.hand_over(co, collider, material, shapes);
         Ok(())
+    }
+
+    /// Whether `collider` is handed to the discrete contact.
+    pub fn is_handled(&self, collider: ColliderHandle) -> bool {
+        self.handled.contains_key(&collider)
     }
 
     /// Gives `collider` back to rapier's own contacts: its live contacts with the discrete
@@ -563,11 +586,25 @@ impl DiscreteContacts {
         forgotten
     }
 
-    /// A collider's shape as f64 parry sees it and as the contact's SDF; an error for a shape
-    /// that is not a convex solid.
-    fn shapes_of(co: &Collider) -> Result<(SharedShape, ConvexShape)> {
+    /// A collider's shape as f64 parry sees it and as the contact's SDF: a convex solid, or
+    /// the solid side of a triangle mesh or height field on a body that does not move under
+    /// forces (a wall); an error for any other shape, and for a mesh on a dynamic body.
+    fn shapes_of(bodies: &RigidBodySet, co: &Collider) -> Result<(SharedShape, ConvexShape)> {
         let query = boundary::query_shape(co)?;
-        let shape = ConvexShape::from_parry(query.as_ref())?;
+        let mesh =
+            matches!(query.as_typed_shape(), TypedShape::TriMesh(_) | TypedShape::HeightField(_));
+        if !mesh {
+            let shape = ConvexShape::from_parry(query.as_ref())?;
+            return Ok((query, shape));
+        }
+        if co.parent().and_then(|b| bodies.get(b)).is_some_and(|rb| rb.is_dynamic()) {
+            return Err(Error::UnsupportedShape {
+                shape: format!("{:?}", query.shape_type()),
+                why: "a triangle mesh or height field is a wall: handled on a fixed or \
+                      kinematic body only; give a dynamic body convex pieces",
+            });
+        }
+        let shape = ConvexShape::Mesh(std::sync::Arc::new(MeshSdf::from_parry(query.as_ref())?));
         Ok((query, shape))
     }
 
@@ -581,8 +618,9 @@ impl DiscreteContacts {
     ) {
         let (centre, radius) = shape.bounding_sphere();
         let b = shape.local_bounds();
-        let half_size =
-            if radius.is_finite() { (b.maxs - b.mins).min_element() * 0.5 } else { Real::INFINITY };
+        // A wall (a half-space, a mesh's solid side) bounds no indentation by its size.
+        let wall = matches!(shape, ConvexShape::HalfSpace { .. } | ConvexShape::Mesh(_));
+        let half_size = if wall { Real::INFINITY } else { (b.maxs - b.mins).min_element() * 0.5 };
         // Handed over again, the flag may be ours: keep what the user had asked for.
         let user_filter = match self.handled.get(&collider) {
             Some(h) => h.user_filter,
@@ -618,7 +656,7 @@ impl DiscreteContacts {
         let mut left = Vec::new();
         for h in all {
             let co = &mut world.colliders[h];
-            match Self::shapes_of(co) {
+            match Self::shapes_of(&world.bodies, co) {
                 Ok(shapes) => self.hand_over(co, h, material, shapes),
                 Err(why) => left.push((h, why)),
             }

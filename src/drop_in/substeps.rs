@@ -129,14 +129,14 @@ impl DiscreteContacts {
         let t_h = hertz_contact_time(m_star, r_star, e_star, v0);
         // Hertz's deepest indentation, from the speed along the line from A to B (a body
         // sliding past another does not indent it); beyond the limit the bodies pass through.
-        let towards_b = match (&ha.shape, &hb.shape) {
-            (ConvexShape::HalfSpace { normal }, _) => pa.rotation * *normal,
-            (_, ConvexShape::HalfSpace { normal }) => -(pb.rotation * *normal),
-            _ => {
-                let (a, b) = (pa.transform_point(ha.centre), pb.transform_point(hb.centre));
-                let image = self.periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a, b));
-                (b + image - a).normalize_or_zero()
-            }
+        let (a, b) = (pa.transform_point(ha.centre), pb.transform_point(hb.centre));
+        let towards_b = if let Some(n) = ha.wall_normal(&pa, b) {
+            n
+        } else if let Some(n) = hb.wall_normal(&pb, a) {
+            -n
+        } else {
+            let image = self.periodic.map_or(Vector::ZERO, |p| p.nearest_image_shift(a, b));
+            (b + image - a).normalize_or_zero()
         };
         let approach = if towards_b == Vector::ZERO {
             (ka.linvel - kb.linvel).length() + rims

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use parry3d_f64::bounding_volume::Aabb;
 
 use super::polyhedron::closest_on_segment;
-use super::{box_sphere, CustomSdf, PolyhedronSdf, Sdf};
+use super::{box_sphere, CustomSdf, MeshSdf, PolyhedronSdf, Sdf};
 use crate::error::{check_finite_vec, check_positive, Error, Result};
 use crate::math::{Real, Vector};
 
@@ -111,6 +111,9 @@ pub enum ConvexShape {
     /// A closure: a state holding one cannot be checkpointed.
     #[cfg_attr(feature = "checkpoint", serde(skip))]
     Custom(CustomSdf),
+    /// The solid side of a triangle mesh or height field ([`MeshSdf`]): not convex, so a wall
+    /// only — the drop-in takes it on colliders whose bodies do not move under forces.
+    Mesh(Arc<MeshSdf>),
 }
 
 /// The larger root of `|w + t v|² = r²` — where the line `w + t v` leaves the ball of radius
@@ -354,6 +357,7 @@ impl ConvexShape {
             }
             Self::HalfSpace { normal } => (normal.dot(p), *normal),
             Self::Custom(c) => (c.distance(p), c.gradient(p)),
+            Self::Mesh(m) => m.distance_and_gradient(p),
         }
     }
 }
@@ -579,6 +583,7 @@ impl Sdf for ConvexShape {
                 Aabb::new(mins, maxs)
             }
             Self::Custom(c) => c.bounds,
+            Self::Mesh(m) => m.local_bounds(),
         }
     }
 }

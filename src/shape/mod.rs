@@ -15,6 +15,7 @@ use crate::math::{Real, Vector};
 
 mod convex;
 mod custom;
+mod mesh;
 mod parry;
 #[cfg(feature = "rapier-f32")]
 pub use parry::widen_f32;
@@ -22,6 +23,7 @@ mod polyhedron;
 
 pub use convex::ConvexShape;
 pub use custom::CustomSdf;
+pub use mesh::MeshSdf;
 pub use polyhedron::PolyhedronSdf;
 
 /// Where `shape` is flat: its [`face_planes`](Sdf::face_planes) when it is a polyhedron, else

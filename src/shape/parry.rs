@@ -42,7 +42,7 @@ impl ConvexShape {
                 Self::Polyhedron(Arc::new(PolyhedronSdf::from_parry(&r.inner_shape))),
                 r.border_radius,
             )?,
-            other => return Err(not_convex(format!("{:?}", shape_type_name(&other)))),
+            other => return Err(not_convex(shape_type_name(&other).to_string())),
         })
     }
 }
@@ -91,8 +91,24 @@ pub fn widen_f32(shape: &dyn rapier3d::parry::shape::Shape) -> Result<SharedShap
             inner_shape: hull(&r.inner_shape)?,
             border_radius: w(r.border_radius),
         }),
+        T32::TriMesh(m) => {
+            let vertices = m.vertices().iter().map(|&v| v.into()).collect();
+            mesh(vertices, m.indices().to_vec())?
+        }
+        T32::HeightField(h) => {
+            let (vertices, indices) = h.to_trimesh();
+            mesh(vertices.into_iter().map(|v| v.into()).collect(), indices)?
+        }
         _ => return Err(not_convex(format!("{:?}", shape.shape_type()))),
     })
+}
+
+/// The f64 triangle mesh of widened `vertices` and `indices`, as [`MeshSdf`](super::MeshSdf)
+/// refuses it where it has no solid side.
+#[cfg(feature = "rapier-f32")]
+fn mesh(vertices: Vec<crate::math::Vector>, indices: Vec<[u32; 3]>) -> Result<SharedShape> {
+    let m = super::MeshSdf::new(vertices, indices)?;
+    Ok(SharedShape::new(m.mesh().clone()))
 }
 
 impl ConvexShape {
