@@ -18,7 +18,8 @@
 //! a `ContactPair`, which only rapier can build); their contact-force events are read after
 //! the step from [`DiscreteContacts::contact_force_events`], and what each live contact
 //! carried over the last step — point, normal, indentation, force — from
-//! [`DiscreteContacts::contacts`]. Bodies and colliders may be removed between steps:
+//! [`DiscreteContacts::contacts`] ([`ParaViewSeries`] writes them and the bodies for
+//! ParaView). Bodies and colliders may be removed between steps:
 //! their contacts end at the next step.
 //!
 //! **Small bodies**: rapier sizes its broad-phase margins by

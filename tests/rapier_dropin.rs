@@ -2,7 +2,7 @@
 //! forces survive, and a step that cannot resolve a contact is refused with advice.
 #![cfg(feature = "rapier")]
 
-use discrete_contact::rapier::{DiscreteContacts, StepPolicy};
+use discrete_contact::rapier::{DiscreteContacts, ParaViewSeries, StepPolicy};
 use discrete_contact::rapier3d_f64::prelude::*;
 use discrete_contact::{Error, IntegrationMode, Material, OverlapSettings};
 use discrete_contact_validation::cylinder_impact::{park, simulate};
@@ -912,4 +912,132 @@ fn a_collider_given_back_rests_on_rapiers_own_contact() {
     let events: Vec<CollisionEvent> = collector.0.lock().unwrap().clone();
     assert!(events.first().is_some_and(|e| e.started()), "{events:?}");
     assert!(events.iter().any(|e| e.stopped()), "no end of the discrete contact: {events:?}");
+}
+
+/// The numbers of the `DataArray` named `name` in a VTK XML file's text.
+fn vtk_array(file: &str, name: &str) -> Vec<f64> {
+    let at = file.find(&format!(r#"Name="{name}""#)).unwrap_or_else(|| panic!("no {name}"));
+    let rest = &file[at..];
+    let values = &rest[rest.find('>').unwrap() + 1..rest.find("</DataArray>").unwrap()];
+    values.split_whitespace().map(|x| x.parse().unwrap()).collect()
+}
+
+/// The value of attribute `name` in an XML tag's text.
+fn xml_attribute<'a>(tag: &'a str, name: &str) -> &'a str {
+    let start = tag.find(&format!(r#" {name}=""#)).unwrap() + name.len() + 3;
+    &tag[start..start + tag[start..].find('"').unwrap()]
+}
+
+/// The `.pvd` collection's data sets: (time, part, file).
+fn pvd_data_sets(series: &ParaViewSeries) -> Vec<(f64, String, String)> {
+    let pvd = std::fs::read_to_string(series.collection()).unwrap();
+    let sets = pvd.lines().filter(|l| l.contains("<DataSet"));
+    sets.map(|l| {
+        let text = |name| xml_attribute(l, name).to_owned();
+        (text("timestep").parse().unwrap(), text("part"), text("file"))
+    })
+    .collect()
+}
+
+/// A ParaView series of two 1 kg boxes resting on a fixed box floor, written at three steps
+/// and read back: the collection lists the three times in order, each with its bodies and
+/// contacts files; the bodies file holds the floor and both boxes at their centres of mass;
+/// the floor's force chain carries both boxes' weight (within 1 %).
+#[test]
+fn a_paraview_series_of_a_resting_stack_reads_back_its_weight() {
+    let v = discrete_contact::math::Vector::new;
+    let mut world = PhysicsWorld::new();
+    world.integration_parameters.dt = 1.0 / 60.0;
+    world.integration_parameters.length_unit = 0.1;
+    let floor = world.insert_body(RigidBodyBuilder::fixed());
+    let floor_collider = world.insert_collider(ColliderBuilder::cuboid(1.0, 0.1, 1.0), Some(floor));
+    let mut bodies = vec![floor];
+    for k in 0..2 {
+        let b = world.insert_body(RigidBodyBuilder::dynamic().translation(v(
+            0.0,
+            0.15 + 0.1 * k as f64,
+            0.0,
+        )));
+        world.insert_collider(ColliderBuilder::cuboid(0.05, 0.05, 0.05).density(1000.0), Some(b));
+        bodies.push(b);
+    }
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+            .unwrap();
+    contacts.handle_all(&mut world, Material::new(1e8, 0.3).unwrap()).unwrap();
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("paraview_stack");
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut series = ParaViewSeries::new(&dir, "stack").unwrap();
+    let dt = world.integration_parameters.dt;
+    let time = |k: usize| (121 + k) as f64 * dt;
+    for _ in 0..120 {
+        contacts.step(&mut world).unwrap();
+    }
+    for k in 0..3 {
+        contacts.step(&mut world).unwrap();
+        series.write(&contacts, &world, time(k)).unwrap();
+    }
+
+    let sets = pvd_data_sets(&series);
+    assert_eq!(sets.len(), 6, "{sets:?}");
+    for (k, step) in sets.chunks(2).enumerate() {
+        assert_eq!([step[0].0, step[1].0], [time(k); 2], "{sets:?}");
+        assert_eq!([step[0].1.as_str(), step[1].1.as_str()], ["0", "1"], "{sets:?}");
+        assert!(step.iter().all(|s| dir.join(&s.2).is_file()), "{sets:?}");
+    }
+
+    let read = |file: &str| std::fs::read_to_string(dir.join(file)).unwrap();
+    let bodies_file = read(&sets[4].2);
+    let (points, handles) = (vtk_array(&bodies_file, "points"), vtk_array(&bodies_file, "handle"));
+    assert_eq!((points.len(), handles.len()), (3 * bodies.len(), bodies.len()));
+    for (k, b) in bodies.iter().enumerate() {
+        assert_eq!(handles[k], b.into_raw_parts().0 as f64);
+        assert_eq!(points[3 * k..3 * k + 3], world.bodies[*b].center_of_mass().to_array());
+    }
+
+    let contacts_file = read(&sets[5].2);
+    let normal_force = vtk_array(&contacts_file, "normal_force");
+    let colliders = vtk_array(&contacts_file, "colliders");
+    assert_eq!(normal_force.len(), 2, "{contacts_file}");
+    assert_eq!(vtk_array(&contacts_file, "points").len(), 3 * 3 * normal_force.len());
+    // Each line through its three points, in order (ParaView reads the connectivity as one
+    // index per tuple).
+    assert!(contacts_file.contains(r#"Name="connectivity" NumberOfComponents="1""#));
+    assert_eq!(vtk_array(&contacts_file, "connectivity"), [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
+    assert_eq!(vtk_array(&contacts_file, "offsets"), [3.0, 6.0]);
+    let floor_index = floor_collider.into_raw_parts().0 as f64;
+    let on_floor: f64 = normal_force
+        .iter()
+        .zip(colliders.chunks(2))
+        .filter(|(_, pair)| pair.contains(&floor_index))
+        .map(|(n, _)| n)
+        .sum();
+    let weight = 2.0 * 9.81;
+    assert!((on_floor / weight - 1.0).abs() < 0.01, "{on_floor} N on the floor, weight {weight} N");
+}
+
+/// A ParaView series refuses a time that is not later than the last one written, or not
+/// finite, and leaves its collection as it was; a stem naming a folder is refused. A write
+/// before the first step gives a valid contacts file without contacts.
+#[test]
+fn a_paraview_series_refuses_a_time_that_does_not_increase() {
+    let (world, contacts, _) = ball_on_floor(1e-4, StepPolicy::AutoSubstep { max_substeps: 5000 });
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("paraview_time");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(matches!(
+        ParaViewSeries::new(&dir, "a/b"),
+        Err(Error::InvalidArgument { name: "stem", .. })
+    ));
+    let mut series = ParaViewSeries::new(&dir, "ball").unwrap();
+    series.write(&contacts, &world, 1.0).unwrap();
+    for t in [0.5, 1.0, f64::NAN, f64::INFINITY] {
+        let refused = series.write(&contacts, &world, t);
+        assert!(matches!(refused, Err(Error::InvalidParameter { name: "time", .. })), "{t}");
+    }
+    series.write(&contacts, &world, 2.0).unwrap();
+    let sets = pvd_data_sets(&series);
+    assert_eq!(sets.iter().map(|s| s.0).collect::<Vec<_>>(), [1.0, 1.0, 2.0, 2.0]);
+    let empty = std::fs::read_to_string(dir.join(&sets[1].2)).unwrap();
+    assert!(empty.contains(r#"NumberOfPoints="0" NumberOfVerts="0" NumberOfLines="0""#));
+    assert!(vtk_array(&empty, "normal_force").is_empty());
 }

@@ -10,6 +10,7 @@ mod impacts;
 mod islands;
 mod neighbours;
 mod network;
+mod paraview;
 mod readout;
 mod substeps;
 mod verify;
@@ -44,6 +45,7 @@ pub use crate::substep::{
 };
 use crate::tangential::{stiffness_ratio, TangentialLaw};
 use neighbours::NeighbourList;
+pub use paraview::ParaViewSeries;
 use parry3d_f64::shape::{SharedShape, TypedShape};
 pub use readout::ContactReading;
 pub use verify::{FailedStep, ENERGY_TOLERANCE, REST_FRACTION};
