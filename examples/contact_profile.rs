@@ -3,7 +3,7 @@
 //! persistent contact (seeded with its last box) or as a first touch.
 //!
 //! `cargo run --release --example contact_profile -- --pair sphere_sphere --n-c 4 --iterations 2000`
-//! (`--pair sphere_sphere|cylinder_plane|cylinder_cylinder|cube_cube|hull_hull|capsule_cylinder`, `--first` for first touches, `--exact-polyhedra` for the exact form of polyhedral pairs, `--facet-bulge` for smooth bodies' facet layers, `--enlargement E` for a contact enlargement of `E` m on each body). Prints the mean time per
+//! (`--pair sphere_sphere|cylinder_plane|cylinder_cylinder|cube_cube|hull_hull|capsule_cylinder`, `--first` for first touches, `--exact-polyhedra` for the exact form of polyhedral pairs, `--no-facet-bulge` without smooth bodies' facet layers, `--enlargement E` for a contact enlargement of `E` m on each body). Prints the mean time per
 //! evaluation and the result, so two builds can be compared on the same output.
 
 mod common;
@@ -31,7 +31,7 @@ fn main() {
             std::process::exit(2);
         })
         .with_exact_polyhedra(args.flag("--exact-polyhedra"))
-        .with_facet_bulge(args.flag("--facet-bulge"));
+        .with_facet_bulge(!args.flag("--no-facet-bulge"));
     let eps = args.number("--enlargement", 0.0);
     let settings = settings.with_enlargement(eps, eps).unwrap_or_else(|e| {
         eprintln!("--enlargement: {e}");

@@ -12,7 +12,8 @@
 //! sub-step). `--f32` runs the same scene in rapier3d (f32) with the f32 drop-in, and writes
 //! `drop_in_f32.csv`. `--length-unit m` sets rapier's `length_unit` in both runs (default 1 m,
 //! as an untuned scene has it; rapier advises the bodies' size, here 0.02 m, which takes its
-//! broad-phase pairs from ~14 000 to ~950).
+//! broad-phase pairs from ~14 000 to ~950). `--no-facet-bulge` integrates the balls' contacts
+//! without their facet layer (second order, `OverlapSettings::with_facet_bulge(false)`).
 
 #[path = "common/mod.rs"]
 mod common;
@@ -31,6 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         per_contact: args.number("--per-contact", 6.0),
         n_c: args.number("--nc", 4.0) as usize,
         exact: args.flag("--exact"),
+        facet_bulge: !args.flag("--no-facet-bulge"),
         reuse: discrete_contact::contact::check_reuse(
             args.number("--reuse", discrete_contact::contact::GEOMETRY_REUSE),
         )

@@ -3,8 +3,9 @@
 //!
 //! Writes `target/validation/hertz_error.csv`, `hertz_force.csv` and `hertz_validation.png`.
 //!
-//! `cargo run --release --example hertz_validation -- --facet-bulge` runs the sub-cell
-//! resolutions and their reference at N_c = 64 with `OverlapSettings::with_facet_bulge`.
+//! `cargo run --release --example hertz_validation -- --no-facet-bulge` runs the sub-cell
+//! resolutions and their reference at N_c = 64 without the balls' facet layer
+//! (`OverlapSettings::with_facet_bulge(false)`: second order).
 
 #[path = "common/mod.rs"]
 mod common;
@@ -35,7 +36,7 @@ fn rms(values: &[f64], reference: &[f64]) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = common::Args::from_env(include_str!("hertz_validation.rs"));
-    let bulge = args.flag("--facet-bulge");
+    let bulge = !args.flag("--no-facet-bulge");
     let cases = HertzCase::all();
     let ds = HertzCase::indentations();
     let dir = common::output_dir();

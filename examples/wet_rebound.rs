@@ -16,7 +16,8 @@
 //! `target/validation/checkpoints/`) and `--resume` (go on from those files after a stop, with
 //! bit-identical results), `--forcing-momentum` (the fluid's force on the sphere as the EDM
 //! forcing's momentum instead of Wen et al.'s link-wise momentum exchange; see
-//! `hlbm::ForceMethod`).
+//! `hlbm::ForceMethod`), `--no-facet-bulge` (the contact's overlap without the sphere's facet
+//! layer: second order, `OverlapSettings::with_facet_bulge(false)`).
 //!
 //! The wet contact is the film model (`--lubrication`, the default): the liquid film's force
 //! below the gap the lattice resolves (see `discrete_contact::lubrication`), a virtual mass
@@ -115,6 +116,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         c.box_size = Vector::new(bx[0], bx[1], bx[2]) * 1e-3;
         c.dry_restitution = args.number("--e-dry", c.dry_restitution);
         c.n_c = args.number("--nc", c.n_c as f64) as usize;
+        c.facet_bulge = !args.flag("--no-facet-bulge");
         let soften = args.number("--youngs-scale", 1.0);
         for m in [&mut c.sphere_material, &mut c.wall_material] {
             *m = Material::new(m.youngs_modulus() * soften, m.poisson_ratio())

@@ -52,7 +52,7 @@ impl OverlapSettings {
             closed_form_spheres: false,
             exact_polyhedra: false,
             polyhedra_on_grid: false,
-            facet_bulge: false,
+            facet_bulge: true,
         })
     }
 
@@ -110,7 +110,7 @@ impl OverlapSettings {
 
     /// Sub-cell integration adds, for a body smooth and curved everywhere (a ball, a capsule),
     /// the layer between each of its interpolated facets and its surface, and completes the
-    /// surface area at the rims it shares with the other body (`true`); off by default. The
+    /// surface area at the rims it shares with the other body (`true`, the default). The
     /// facets' corners lie on the surface and the facets inside the convex body, so
     /// interpolation leaves out a layer quadratic over each facet: with it the volume of such a
     /// pair is third order in the grid's spacing instead of second — a sphere on a plane or on
@@ -118,9 +118,10 @@ impl OverlapSettings {
     /// comes without it — for about a quarter more work per evaluation of a sphere pair at the
     /// same `N_c`. Bodies with edges or flat faces (cuboids, hulls, cylinders, cones, enlarged
     /// polyhedra) and half-spaces carry no layer (their area at a rim shared with a ball or a
-    /// capsule is completed all the same). Off by default for now (see
-    /// `docs/performance.md`); the f32 drop-in's agreement with the f64 one is tested with it and
-    /// without, over many bounces against the f64 build rounded to f32 (`tests/rapier_f32.rs`).
+    /// capsule is completed all the same). `false` integrates the interpolated facets alone
+    /// (second order, as before the layer; `hertz_validation -- --no-facet-bulge`). The f32
+    /// drop-in's agreement with the f64 one is tested with it and without, over many bounces
+    /// against the f64 build rounded to f32 (`tests/rapier_f32.rs`).
     pub fn with_facet_bulge(mut self, on: bool) -> Self {
         self.facet_bulge = on;
         self

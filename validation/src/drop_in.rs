@@ -63,6 +63,8 @@ pub struct Options {
     pub n_c: usize,
     /// The exact forms where they exist (closed-form spheres, exact polyhedra).
     pub exact: bool,
+    /// The balls' facet layer (`OverlapSettings::with_facet_bulge`; on by default).
+    pub facet_bulge: bool,
     /// Geometry reuse fraction (0: every evaluation in full).
     pub reuse: Real,
     /// Rapier's `integration_parameters.length_unit` (m) in both runs: its broad phase fattens

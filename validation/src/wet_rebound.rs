@@ -46,6 +46,10 @@ pub struct WetRebound {
     pub dt: Real,
     /// Overlap resolution of the contact.
     pub n_c: usize,
+    /// The sphere's facet layer in the overlap (`OverlapSettings::with_facet_bulge`; a case
+    /// saved before it existed resumes without it).
+    #[serde(default)]
+    pub facet_bulge: bool,
     /// Contact enlargement (m): the gap at which the contact starts, standing for the
     /// lubrication film the lattice cannot resolve.
     pub enlargement: Real,
@@ -91,6 +95,7 @@ impl WetRebound {
             dx,
             dt: 5e-6 * (dx / 0.3e-3).powi(2),
             n_c: 16,
+            facet_bulge: true,
             enlargement: dx / 7.0,
             film_cutoff: None,
             film_min_gap: default_film_min_gap(),
@@ -262,6 +267,7 @@ impl ReboundRun {
                 ));
             }
             let settings = OverlapSettings::new(case.n_c, IntegrationMode::Subcell)?
+                .with_facet_bulge(case.facet_bulge)
                 .with_enlargement(0.5 * case.enlargement, 0.5 * case.enlargement)?;
             let mut c = DiscreteContacts::new(settings, case.dry_restitution)?
                 .with_policy(StepPolicy::AutoSubstep { max_substeps: 100_000 });

@@ -169,7 +169,8 @@ fn rapier_penetration(world: &PhysicsWorld) -> f64 {
 /// discrete contact added by the few lines marked below — printing a row every
 /// `report_every` s of simulated time.
 pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
-    let Options { bodies: n, seconds, per_contact, n_c, exact, reuse, length_unit } = *options;
+    let Options { bodies: n, seconds, per_contact, n_c, exact, facet_bulge, reuse, length_unit } =
+        *options;
     let scene = || {
         let mut scene = bin_scene(n);
         scene.world.integration_parameters.length_unit = length_unit as Real;
@@ -204,7 +205,8 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
     // 2. The same scene with the discrete contact: these lines are the drop-in (rubber
     //    E = 5 MPa, e = 0.5, friction 0.5/0.4).
     let BinScene { mut world, .. } = scene();
-    let overlap = OverlapSettings::new(n_c, IntegrationMode::Subcell)?;
+    let overlap =
+        OverlapSettings::new(n_c, IntegrationMode::Subcell)?.with_facet_bulge(facet_bulge);
     let mut contacts = discrete_contacts_with(
         overlap.with_closed_form_spheres(exact).with_exact_polyhedra(exact),
         per_contact,
@@ -214,7 +216,11 @@ pub fn run(options: &Options, report_every: f64) -> Result<Summary> {
     let handled = world.colliders.len() - left.len();
     // (then `contacts.step(&mut world)?` where the loop had `world.step()`)
 
-    let forms = if exact { ", exact forms where they exist" } else { "" };
+    let forms = match (exact, facet_bulge) {
+        (true, _) => ", exact forms where they exist",
+        (false, false) => ", no facet layer",
+        (false, true) => "",
+    };
     println!("\ndiscrete contacts ({handled} colliders handled, sub-cell N_c = {n_c}{forms}, rubber E = 5 MPa, e = 0.5, μ = 0.5/0.4, {per_contact} sub-steps per contact time, geometry reuse {reuse}):");
     println!(
         "{:>6} {:>12} {:>9} {:>9} {:>10} {:>14} {:>8}",
