@@ -268,3 +268,82 @@ fn the_f32_drop_in_takes_a_mesh_as_a_wall() {
     let on_ball = if c.colliders.0 == floor { -c.force_on_a } else { c.force_on_a };
     assert!((on_ball.y / weight() - 1.0).abs() < 0.01, "force {on_ball:?}");
 }
+
+/// The inside of a hollow body as a wall: a closed cubic room (side 0.4 m) whose triangles face
+/// inwards is the solid around it, and a ball set on its floor rests there carrying its weight
+/// within 1 %. (Before the cutting planes of a mesh were checked
+/// against its faces, a wall's plane cut the floor's overlap away and the ball fell through.)
+#[test]
+fn a_ball_rests_and_stays_inside_a_closed_mesh_facing_inwards() {
+    let half = 0.2;
+    let corners: Vec<V> = (0..8)
+        .map(|k| {
+            V::new(
+                if k & 1 == 0 { -half } else { half },
+                if k & 2 == 0 { -half } else { half },
+                if k & 4 == 0 { -half } else { half },
+            )
+        })
+        .collect();
+    // Each face as two triangles counter-clockwise seen from inside the room.
+    let quads =
+        [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+    let indices: Vec<[u32; 3]> =
+        quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+    // The overlap with the floor near a wall, in either order, is the floor plane's.
+    {
+        use discrete_contact::math::Pose;
+        use discrete_contact::{compute_overlap, ConvexShape, MeshSdf};
+        let inside = ConvexShape::Mesh(std::sync::Arc::new(
+            MeshSdf::new(corners.clone(), indices.clone()).unwrap(),
+        ));
+        let floor = ConvexShape::half_space(V::Y).unwrap();
+        let ball = ConvexShape::ball(RADIUS).unwrap();
+        let s = OverlapSettings::new(4, IntegrationMode::Subcell).unwrap();
+        let at = Pose::from_translation(V::new(0.08, RADIUS - half - 2e-4, 0.03));
+        let below = Pose::from_translation(V::new(0.0, -half, 0.0));
+        let plane = compute_overlap(&ball, &at, &floor, &below, &s, None).unwrap().unwrap();
+        for (a, pa, b, pb) in
+            [(&ball, at, &inside, Pose::IDENTITY), (&inside, Pose::IDENTITY, &ball, at)]
+        {
+            let g =
+                compute_overlap(a, &pa, b, &pb, &s, None).unwrap().expect("the floor's overlap");
+            assert!(
+                (g.volume / plane.volume - 1.0).abs() < 1e-6,
+                "{} against {}",
+                g.volume,
+                plane.volume
+            );
+        }
+    }
+    let mut world = PhysicsWorld::new();
+    world.integration_parameters.dt = 1.0 / 60.0;
+    world.integration_parameters.length_unit = 2.0 * RADIUS;
+    let ground = world.insert_body(RigidBodyBuilder::fixed());
+    let room =
+        world.insert_collider(ColliderBuilder::trimesh(corners, indices).unwrap(), Some(ground));
+    let ball = world.insert_body(RigidBodyBuilder::dynamic().translation(V::new(
+        -0.05,
+        RADIUS - half,
+        0.03,
+    )));
+    world.insert_collider(ColliderBuilder::ball(RADIUS).density(DENSITY), Some(ball));
+    let mut contacts =
+        DiscreteContacts::new(OverlapSettings::new(4, IntegrationMode::Subcell).unwrap(), 0.5)
+            .unwrap()
+            .with_friction(discrete_contact::Friction::new(0.5, 0.4, 1e-3).unwrap());
+    let left = contacts.handle_all(&mut world, Material::new(1e7, 0.3).unwrap()).unwrap();
+    assert!(left.is_empty(), "{left:?}");
+    for step in 0..240 {
+        contacts.step(&mut world).unwrap();
+        let x = world.bodies[ball].translation();
+        assert!(x.abs().max_element() < half - 0.9 * RADIUS, "step {step}: left the room at {x:?}");
+    }
+    let b = &world.bodies[ball];
+    assert!(b.linvel().length() < 1e-2, "still moving: {:?}", b.linvel());
+    let on_ball: V = contacts
+        .contacts_with(room)
+        .map(|c| if c.colliders.0 == room { -c.force_on_a } else { c.force_on_a })
+        .sum();
+    assert!((on_ball.y / weight() - 1.0).abs() < 0.01, "force {on_ball:?}");
+}

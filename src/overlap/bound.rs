@@ -80,7 +80,19 @@ fn search<A: Sdf + ?Sized, B: Sdf + ?Sized>(
             if g == Vector::ZERO || !g.is_finite() {
                 continue;
             }
-            planes[body] = Some(Plane { n: g, h: g.dot(x) - d + margin, body });
+            let plane = Plane { n: g, h: g.dot(x) - d + margin, body };
+            // A body that is not convex may reach past the plane elsewhere in `P`.
+            let holds = |convex: bool, holds_within: &dyn Fn(&Aabb) -> bool| {
+                convex || extent(p.current_vertices()).is_none_or(|r| holds_within(&r))
+            };
+            let holds = if body == 0 {
+                holds(pair.a.is_convex(), &|r| pair.a.holds_within(plane.n, plane.h, r))
+            } else {
+                holds(pair.b.is_convex(), &|r| pair.b.holds_within(plane.n, plane.h, r))
+            };
+            if holds {
+                planes[body] = Some(plane);
+            }
         }
         if let [Some(a), Some(b)] = planes {
             if crease::order(&a, &b).is_gt() {

@@ -112,6 +112,31 @@ impl<S: Sdf + ?Sized> Placed<'_, S> {
         (d - self.eps, self.rot * g)
     }
 
+    /// Whether the body is convex ([`Sdf::is_convex`]).
+    pub(super) fn is_convex(&self) -> bool {
+        self.shape.is_convex()
+    }
+
+    /// Whether the plane `n·x <= h` (pair frame) holds the body within `region` (pair frame;
+    /// [`Sdf::holds_within`], enlarged by `ε`: the plane moved out by it).
+    pub(super) fn holds_within(&self, n: Vector, h: Real, region: &Aabb) -> bool {
+        let (lo, hi) = (region.mins - self.origin, region.maxs - self.origin);
+        let (mut mins, mut maxs) =
+            (Vector::splat(Real::INFINITY), Vector::splat(Real::NEG_INFINITY));
+        for c in 0..8 {
+            let corner = Vector::new(
+                if c & 1 == 0 { lo.x } else { hi.x },
+                if c & 2 == 0 { lo.y } else { hi.y },
+                if c & 4 == 0 { lo.z } else { hi.z },
+            );
+            let local = self.rot_t * corner;
+            (mins, maxs) = (mins.min(local), maxs.max(local));
+        }
+        let local_n = self.rot_t * n;
+        let local_h = h - n.dot(self.origin) - self.eps * n.length();
+        self.shape.holds_within(local_n, local_h, &Aabb::new(mins, maxs))
+    }
+
     /// The shape's bounds in the pair's frame, enlarged by `ε`; infinite components stay infinite.
     pub(super) fn bounds(&self) -> Aabb {
         let b = self.shape.local_bounds();

@@ -473,6 +473,17 @@ impl Sdf for ConvexShape {
         }
     }
 
+    fn is_convex(&self) -> bool {
+        !matches!(self, Self::Mesh(_))
+    }
+
+    fn holds_within(&self, n: Vector, h: Real, region: &Aabb) -> bool {
+        match self {
+            Self::Mesh(m) => m.holds_within(n, h, region),
+            _ => true,
+        }
+    }
+
     fn has_edges(&self) -> bool {
         !matches!(self, Self::Ball { .. } | Self::Capsule { .. } | Self::HalfSpace { .. })
     }

@@ -8,15 +8,17 @@
 //! ground sheet, a height field) the solid is what lies behind its faces, so a body resting
 //! across the shared edge or vertex of coplanar triangles meets exactly the plane they lie in.
 //!
-//! A mesh is not convex, and the overlap's bounds are cut by tangent planes that are exact for
-//! convex bodies only (see the overlap's `bound` module). On flat parts and convex edges the
-//! overlap is exact; a body that touches two faces across a concave edge (an inner corner)
-//! may lose the part of its overlap that lies behind the other face's tangent plane. Meshes
-//! are walls: the drop-in hands them over on bodies that do not move under forces (fixed or
-//! kinematic), never as dynamic pieces.
+//! A mesh is not convex ([`Sdf::is_convex`]): the overlap's box is cut by one of its tangent
+//! planes only where the triangles that meet the box lie on the plane's inner side
+//! ([`Sdf::holds_within`]). A closed mesh whose faces look inwards (a room, a drum) is the
+//! solid around it. A pair keeps one contact, so a body touching two faces across a concave
+//! edge gets one normal between theirs (see `docs/design.md`). Meshes are walls: the drop-in
+//! hands them over on bodies that do not move under forces (fixed or kinematic), never as
+//! dynamic pieces.
 
-use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::query::PointQueryWithLocation;
+use parry3d_f64::shape::TrianglePointLocation;
 use parry3d_f64::shape::{HeightField, Shape, TriMesh, TriMeshFlags, TypedShape};
 
 use super::Sdf;
@@ -31,8 +33,10 @@ pub struct MeshSdf {
     mesh: TriMesh,
     /// The mesh's box, grown into the solid side of an open mesh (see [`Sdf::local_bounds`]).
     bounds: Aabb,
-    /// Whether every edge has a triangle on both sides.
+    /// Whether every edge has a triangle on both sides (a closed surface).
     closed: bool,
+    /// Distances below this (a few round-offs of the mesh's size) are on the surface.
+    surface_tolerance: Real,
 }
 
 impl std::fmt::Debug for MeshSdf {
@@ -76,13 +80,35 @@ impl MeshSdf {
         let closed =
             mesh.topology().is_some_and(|t| t.half_edges.iter().all(|h| h.twin != u32::MAX));
         let mut bounds = mesh.local_aabb();
-        if !closed {
+        // A closed mesh whose faces look inwards (a drum, a room) is a hollow: its solid lies
+        // outside, unbounded like an open mesh's.
+        if !closed || enclosed_volume(&mesh) <= 0.0 {
             bounds = open_bounds(&mesh, bounds);
         }
         if !(bounds.maxs - bounds.mins).min_element().is_finite() {
             return Err(refuse("its box is not finite"));
         }
-        Ok(Self { mesh, bounds, closed })
+        let size = (mesh.local_aabb().maxs - mesh.local_aabb().mins).max_element();
+        let surface_tolerance = 1e3 * Real::EPSILON * size.max(Real::MIN_POSITIVE);
+        Ok(Self { mesh, bounds, closed, surface_tolerance })
+    }
+
+    /// The unit pseudo-normal of the feature `location` of `triangle`: the face's normal, or
+    /// the angle-weighted normal of the faces meeting at an edge or a vertex.
+    fn pseudo_normal(&self, triangle: u32, location: TrianglePointLocation) -> Vector {
+        let face = self.mesh.triangle(triangle).normal().unwrap_or(Vector::Y);
+        let Some(pseudo) = self.mesh.pseudo_normals_if_oriented() else { return face };
+        let n = match location {
+            TrianglePointLocation::OnEdge(i, _) => {
+                pseudo.edges_pseudo_normal.get(triangle as usize).map(|e| e[i as usize])
+            }
+            TrianglePointLocation::OnVertex(i) => {
+                let v = self.mesh.indices()[triangle as usize][i as usize];
+                pseudo.vertices_pseudo_normal.get(v as usize).copied()
+            }
+            _ => None,
+        };
+        n.and_then(|n| n.try_normalize()).unwrap_or(face)
     }
 
     /// The solid side of a parry triangle mesh or height field (a height field's triangles
@@ -113,6 +139,12 @@ impl MeshSdf {
     pub fn mesh(&self) -> &TriMesh {
         &self.mesh
     }
+}
+
+/// The volume a closed mesh's faces enclose, positive when they look outwards (the divergence
+/// theorem over the triangles' cones from the origin).
+fn enclosed_volume(mesh: &TriMesh) -> Real {
+    mesh.triangles().map(|t| t.a.dot(t.b.cross(t.c)) / 6.0).sum()
 }
 
 /// The box of an open mesh's solid side: the solid behind an open sheet has no far side, so
@@ -147,22 +179,39 @@ impl Sdf for MeshSdf {
         self.distance_and_gradient(p).0
     }
 
-    /// The direction from the nearest point of the mesh to `p`, outward; on the surface, the
-    /// pseudo-normal there.
+    /// The direction from the nearest point of the mesh to `p`, outward; on the surface (within
+    /// a round-off of the mesh's size, where that direction is noise), the pseudo-normal there.
     fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
-        let (proj, (triangle, _)) = self.mesh.project_local_point_and_get_location(p, false);
+        let (proj, (triangle, location)) = self.mesh.project_local_point_and_get_location(p, false);
         let away = p - proj.point;
         let length = away.length();
         let sign = if proj.is_inside { -1.0 } else { 1.0 };
-        let gradient = if length > 0.0 {
+        let gradient = if length > self.surface_tolerance {
             away / length * sign
         } else {
-            self.mesh.triangle(triangle).normal().unwrap_or(Vector::Y)
+            self.pseudo_normal(triangle, location)
         };
         (sign * length, gradient)
     }
 
     fn local_bounds(&self) -> Aabb {
         self.bounds
+    }
+
+    /// Every triangle that meets `region` lies in the half-space (to a round-off of the mesh's
+    /// size): the surface there, and so the solid behind it, is on the plane's inner side. At
+    /// a concave edge the other face rises past the plane and the cut is refused.
+    fn is_convex(&self) -> bool {
+        false
+    }
+
+    fn holds_within(&self, n: Vector, h: Real, region: &Aabb) -> bool {
+        let tolerance = self.surface_tolerance;
+        let grown = region.loosened(tolerance);
+        let holds = self.mesh.bvh().intersect_aabb(&grown).all(|t| {
+            let t = self.mesh.triangle(t);
+            [t.a, t.b, t.c].iter().all(|v| n.dot(*v) <= h + tolerance)
+        });
+        holds
     }
 }

@@ -152,6 +152,23 @@ pub trait Sdf: Send + Sync {
         None
     }
 
+    /// Whether the body is convex (`true`, the default: the shapes this crate is for). A body
+    /// that is not (a mesh's solid side) is asked [`holds_within`](Self::holds_within) before
+    /// a tangent plane cuts the overlap's box.
+    fn is_convex(&self) -> bool {
+        true
+    }
+
+    /// Whether the half-space `n·p <= h` (body frame) holds every part of the body that lies in
+    /// `region` (body frame): the test a cutting plane through a nearest surface point must
+    /// pass before the overlap's box is cut by it. Any tangent plane of a convex body holds the
+    /// whole body, so the default is `true`; a body that is not convex (a mesh's solid side)
+    /// answers for the part of it the region holds.
+    fn holds_within(&self, n: Vector, h: Real, region: &Aabb) -> bool {
+        let _ = (n, h, region);
+        true
+    }
+
     /// Whether the surface may have edges or corners. `true` (the default) unless it is smooth
     /// (a ball, a capsule) or flat (a half-space); `false` lets the sub-cell grid skip its test
     /// for cells an edge or a corner passes through, which then integrate better by the
