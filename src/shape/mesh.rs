@@ -179,6 +179,12 @@ impl Sdf for MeshSdf {
         self.distance_and_gradient(p).0
     }
 
+    /// The nearest point's direction (see [`distance_and_gradient`](Self::distance_and_gradient)),
+    /// from the one nearest-point query rather than the default's six of finite differences.
+    fn gradient(&self, p: Vector) -> Vector {
+        self.distance_and_gradient(p).1
+    }
+
     /// The direction from the nearest point of the mesh to `p`, outward; on the surface (within
     /// a round-off of the mesh's size, where that direction is noise), the pseudo-normal there.
     fn distance_and_gradient(&self, p: Vector) -> (Real, Vector) {
